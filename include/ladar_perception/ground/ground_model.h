@@ -1,0 +1,29 @@
+// Ground models selectable by name (ground_segment --method, the nodelets' `method` parameter).
+// One virtual call per scan, none per point.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "ladar_perception/cloud/point_cloud_view.h"
+#include "ladar_perception/ground/ground_classification.h"
+
+namespace ladar_perception {
+
+class GroundModel {
+ public:
+  virtual ~GroundModel() = default;
+  virtual std::string name() const = 0;
+  // Labels every point of the view (out is resized to view.size(), same order as the input).
+  // Never throws on bad data: NaN/Inf or out-of-range returns are labelled unknown.
+  virtual void classify(const PointCloudView& view, const SensorPose& pose,
+                        GroundClassification* out) = 0;
+};
+
+// Names accepted by makeGroundModel, the default first.
+std::vector<std::string> groundModelNames();
+// nullptr with a reason in *error for an unknown name.
+std::unique_ptr<GroundModel> makeGroundModel(const std::string& name, std::string* error);
+
+}  // namespace ladar_perception
