@@ -5,6 +5,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -46,5 +47,11 @@ struct VerticalScanParams {
 // Settings by name: "thesis" (the thesis's method and settings) and "default" (beyond it).
 VerticalScanParams verticalScanThesisParams();
 VerticalScanParams verticalScanDefaultParams();
+
+// The vertical scan method as a GroundModel with the given params (used by the nodelet, which
+// rebuilds the model when dynamic_reconfigure changes a parameter). Declared here by the lead
+// for the ROS adapter; implement it next to the algorithm.
+class GroundModel;
+std::unique_ptr<GroundModel> makeVerticalScanModel(const VerticalScanParams& params);
 
 }  // namespace ladar_perception
