@@ -1,0 +1,60 @@
+// Bookkeeping every adapter shares: a per-kind throttled error reporter (each kind of bad
+// input is logged once per throttle period, with what was wrong) and processing statistics for
+// diagnostics. Thread-safe: callbacks may run on several threads of a nodelet manager.
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <mutex>
+#include <string>
+
+#include <diagnostic_updater/DiagnosticStatusWrapper.h>
+#include <ros/time.h>
+
+namespace ladar_perception {
+
+class InputHealth {
+ public:
+  explicit InputHealth(double throttle_period = 5.0) : throttle_period_(throttle_period) {}
+
+  // Counts a problem of the given kind ("unreadable cloud", "missing tf", ...). Returns true
+  // when the caller should log it now (first time, or the throttle period has passed since
+  // this kind was last logged); *suppressed says how many of this kind were not logged since.
+  bool report(const std::string& kind, uint64_t* suppressed = nullptr);
+
+  // A scan that went through the core: its processing time in seconds.
+  void processed(double seconds);
+  // A scan dropped before processing (tf never arrived, queue overflow); counts it under
+  // `kind` and returns, like report(), whether to log now.
+  bool dropped(const std::string& kind, uint64_t* suppressed = nullptr) {
+    dropped_count();
+    return report(kind, suppressed);
+  }
+
+  // Adds counts, error kinds and processing times to a diagnostic status; warns while errors
+  // happened in the last throttle period.
+  void fillDiagnostics(diagnostic_updater::DiagnosticStatusWrapper& status) const;
+
+  uint64_t processedCount() const;
+  uint64_t errorCount() const;
+  uint64_t errorCount(const std::string& kind) const;
+
+ private:
+  void dropped_count();
+  struct Kind {
+    uint64_t count = 0;
+    uint64_t suppressed = 0;
+    ros::WallTime last_logged;
+    ros::WallTime last_seen;
+  };
+  mutable std::mutex mutex_;
+  double throttle_period_;
+  std::map<std::string, Kind> kinds_;
+  uint64_t processed_ = 0;
+  uint64_t dropped_ = 0;
+  double last_seconds_ = 0.0;
+  double max_seconds_ = 0.0;
+  double sum_seconds_ = 0.0;
+};
+
+}  // namespace ladar_perception

@@ -1,0 +1,83 @@
+#include "ladar_perception/ros/input_health.h"
+
+#include <algorithm>
+#include <sstream>
+
+namespace ladar_perception {
+
+bool InputHealth::report(const std::string& kind, uint64_t* suppressed) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  Kind& k = kinds_[kind];
+  const ros::WallTime now = ros::WallTime::now();
+  ++k.count;
+  k.last_seen = now;
+  const bool log = k.count == 1 || (now - k.last_logged).toSec() >= throttle_period_;
+  if (log) {
+    if (suppressed) *suppressed = k.suppressed;
+    k.suppressed = 0;
+    k.last_logged = now;
+  } else {
+    ++k.suppressed;
+  }
+  return log;
+}
+
+void InputHealth::dropped_count() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  ++dropped_;
+}
+
+void InputHealth::processed(double seconds) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  ++processed_;
+  last_seconds_ = seconds;
+  max_seconds_ = std::max(max_seconds_, seconds);
+  sum_seconds_ += seconds;
+}
+
+uint64_t InputHealth::processedCount() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return processed_;
+}
+
+uint64_t InputHealth::errorCount() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  uint64_t n = 0;
+  for (const auto& k : kinds_) n += k.second.count;
+  return n;
+}
+
+uint64_t InputHealth::errorCount(const std::string& kind) const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  auto it = kinds_.find(kind);
+  return it == kinds_.end() ? 0 : it->second.count;
+}
+
+void InputHealth::fillDiagnostics(diagnostic_updater::DiagnosticStatusWrapper& status) const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  const ros::WallTime now = ros::WallTime::now();
+  uint64_t errors = 0;
+  std::string recent;
+  for (const auto& k : kinds_) {
+    errors += k.second.count;
+    status.add("errors: " + k.first, k.second.count);
+    if ((now - k.second.last_seen).toSec() < throttle_period_) {
+      recent += (recent.empty() ? "" : "; ") + k.first;
+    }
+  }
+  status.add("scans processed", processed_);
+  status.add("scans dropped", dropped_);
+  status.add("errors total", errors);
+  status.add("processing time last [ms]", last_seconds_ * 1e3);
+  status.add("processing time max [ms]", max_seconds_ * 1e3);
+  status.add("processing time mean [ms]", processed_ ? sum_seconds_ / processed_ * 1e3 : 0.0);
+  if (!recent.empty()) {
+    status.summary(diagnostic_msgs::DiagnosticStatus::WARN, "recent input problems: " + recent);
+  } else if (processed_ == 0) {
+    status.summary(diagnostic_msgs::DiagnosticStatus::WARN, "no scan processed yet");
+  } else {
+    status.summary(diagnostic_msgs::DiagnosticStatus::OK, "processing");
+  }
+}
+
+}  // namespace ladar_perception

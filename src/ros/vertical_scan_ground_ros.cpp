@@ -1,0 +1,254 @@
+#include "ladar_perception/ros/vertical_scan_ground_ros.h"
+
+#include <exception>
+#include <sstream>
+
+#include <tf2_eigen/tf2_eigen.h>
+
+#include "ladar_perception/ros/cloud_conversion.h"
+
+namespace ladar_perception {
+
+VerticalScanParams toVerticalScanParams(const VerticalScanGroundConfig& c) {
+  VerticalScanParams p =
+      c.method == "thesis" ? verticalScanThesisParams() : verticalScanDefaultParams();
+  p.column_width_deg = static_cast<float>(c.column_width_deg);
+  p.min_range = static_cast<float>(c.min_range);
+  p.max_range = static_cast<float>(c.max_range);
+  p.ground_slope_min = static_cast<float>(c.ground_slope_min);
+  p.ground_slope_max = static_cast<float>(c.ground_slope_max);
+  p.iterations = c.iterations;
+  p.weight_bias = static_cast<float>(c.weight_bias);
+  p.tolerances.gnd_error_max_base = static_cast<float>(c.gnd_error_max_base);
+  p.tolerances.gnd_error_max_per_m = static_cast<float>(c.gnd_error_max_per_m);
+  p.tolerances.slope_error_max_base = static_cast<float>(c.slope_error_max_base);
+  p.tolerances.slope_error_max_per_m = static_cast<float>(c.slope_error_max_per_m);
+  p.tolerances.obstacle_threshold = static_cast<float>(c.obstacle_threshold);
+  p.bend_ground_line = c.bend_ground_line;
+  p.segment_length = static_cast<float>(c.segment_length);
+  p.couple_columns = c.couple_columns;
+  p.coupling_radius = c.coupling_radius;
+  p.min_ground_returns = c.min_ground_returns;
+  p.negative_obstacles = c.negative_obstacles;
+  return p;
+}
+
+void loadMethodSettings(const std::string& method, VerticalScanGroundConfig* c) {
+  const VerticalScanParams p =
+      method == "thesis" ? verticalScanThesisParams() : verticalScanDefaultParams();
+  c->column_width_deg = p.column_width_deg;
+  c->min_range = p.min_range;
+  c->max_range = p.max_range;
+  c->ground_slope_min = p.ground_slope_min;
+  c->ground_slope_max = p.ground_slope_max;
+  c->iterations = p.iterations;
+  c->weight_bias = p.weight_bias;
+  c->gnd_error_max_base = p.tolerances.gnd_error_max_base;
+  c->gnd_error_max_per_m = p.tolerances.gnd_error_max_per_m;
+  c->slope_error_max_base = p.tolerances.slope_error_max_base;
+  c->slope_error_max_per_m = p.tolerances.slope_error_max_per_m;
+  c->obstacle_threshold = p.tolerances.obstacle_threshold;
+  c->bend_ground_line = p.bend_ground_line;
+  c->segment_length = p.segment_length;
+  c->couple_columns = p.couple_columns;
+  c->coupling_radius = p.coupling_radius;
+  c->min_ground_returns = p.min_ground_returns;
+  c->negative_obstacles = p.negative_obstacles;
+}
+
+VerticalScanGroundRos::VerticalScanGroundRos(ros::NodeHandle nh, ros::NodeHandle private_nh)
+    : nh_(nh), private_nh_(private_nh), diagnostics_(nh, private_nh) {
+  ground_frame_ = private_nh_.param<std::string>("ground_frame", "base_footprint");
+  use_tf_ = private_nh_.param("use_tf", true);
+  const int queue_size = private_nh_.param("queue_size", 3);
+  const double tf_tolerance = private_nh_.param("tf_tolerance", 0.1);
+  expected_rate_min_ = private_nh_.param("expected_rate_min", 5.0);
+  expected_rate_max_ = private_nh_.param("expected_rate_max", 20.0);
+
+  ground_pub_ = nh_.advertise<sensor_msgs::PointCloud2>("ground", 2);
+  obstacles_pub_ = nh_.advertise<sensor_msgs::PointCloud2>("obstacles", 2);
+  classified_pub_ = nh_.advertise<sensor_msgs::PointCloud2>("classified", 2);
+
+  diagnostics_.setHardwareID("none");
+  rate_status_.reset(new diagnostic_updater::FrequencyStatus(
+      diagnostic_updater::FrequencyStatusParam(&expected_rate_min_, &expected_rate_max_, 0.1, 10)));
+  diagnostics_.add(*rate_status_);
+  diagnostics_.add("vertical scan ground", this, &VerticalScanGroundRos::diagnose);
+  diagnostics_timer_ = private_nh_.createTimer(ros::Duration(1.0), [this](const ros::TimerEvent&) {
+    try {
+      diagnostics_.update();
+    } catch (const std::exception& e) {
+      ROS_ERROR_THROTTLE(10.0, "VerticalScanGround: diagnostics update failed: %s", e.what());
+    }
+  });
+
+  reconfigure_server_.reset(new dynamic_reconfigure::Server<VerticalScanGroundConfig>(private_nh_));
+  reconfigure_server_->setCallback(
+      [this](VerticalScanGroundConfig& config, uint32_t level) { reconfigure(config, level); });
+
+  // Subscribe last.
+  if (use_tf_) {
+    tf_listener_.reset(new tf2_ros::TransformListener(tf_buffer_, nh_));
+    cloud_sub_.subscribe(nh_, "points", queue_size);
+    tf_filter_.reset(new tf2_ros::MessageFilter<sensor_msgs::PointCloud2>(
+        cloud_sub_, tf_buffer_, ground_frame_, queue_size, nh_));
+    tf_filter_->setTolerance(ros::Duration(tf_tolerance));
+    tf_filter_->registerCallback(&VerticalScanGroundRos::cloudCallback, this);
+    tf_filter_->registerFailureCallback(
+        [this](const sensor_msgs::PointCloud2ConstPtr& msg,
+               tf2_ros::filter_failure_reasons::FilterFailureReason reason) { tfFailure(msg, reason); });
+  } else {
+    direct_sub_ = nh_.subscribe("points", queue_size, &VerticalScanGroundRos::cloudCallback, this);
+  }
+  ROS_INFO("VerticalScanGround: listening on %s, ground frame %s%s",
+           nh_.resolveName("points").c_str(), ground_frame_.c_str(),
+           use_tf_ ? "" : " (tf off: fixed sensor_height)");
+}
+
+VerticalScanGroundRos::~VerticalScanGroundRos() {
+  diagnostics_timer_.stop();
+  if (tf_filter_) tf_filter_->clear();
+}
+
+sensor_msgs::PointCloud2ConstPtr VerticalScanGroundRos::lastClassified() const {
+  std::lock_guard<std::mutex> lock(last_mutex_);
+  return last_classified_.lock();
+}
+
+void VerticalScanGroundRos::reconfigure(VerticalScanGroundConfig& config, uint32_t level) {
+  std::lock_guard<std::mutex> lock(config_mutex_);
+  const bool initial = last_method_.empty();
+  if (!initial && config.method != last_method_) {
+    // A new method: load its settings into every threshold (the user tunes from there).
+    loadMethodSettings(config.method, &config);
+  } else if (initial && config.method != "default") {
+    // Start-up with a non-default method: its settings, except thresholds given explicitly.
+    loadMethodSettings(config.method, &config);
+    for (const auto& param : VerticalScanGroundConfig::__getParamDescriptions__()) {
+      if (param->name != "method" && private_nh_.hasParam(param->name)) {
+        param->fromServer(private_nh_, config);
+      }
+    }
+  }
+  last_method_ = config.method;
+  config_ = config;
+  config_changed_ = true;
+}
+
+void VerticalScanGroundRos::reportError(const std::string& kind, const std::string& detail) {
+  uint64_t suppressed = 0;
+  if (health_.report(kind, &suppressed)) {
+    if (suppressed > 0) {
+      ROS_ERROR("VerticalScanGround: %s: %s (%lu more of this kind since the last message)",
+                kind.c_str(), detail.c_str(), static_cast<unsigned long>(suppressed));
+    } else {
+      ROS_ERROR("VerticalScanGround: %s: %s", kind.c_str(), detail.c_str());
+    }
+  }
+}
+
+void VerticalScanGroundRos::tfFailure(const sensor_msgs::PointCloud2ConstPtr& msg,
+                                      tf2_ros::filter_failure_reasons::FilterFailureReason reason) {
+  try {
+    std::ostringstream s;
+    s << "scan at " << msg->header.stamp << " dropped: no transform " << ground_frame_ << " <- '"
+      << msg->header.frame_id << "' (";
+    switch (reason) {
+      case tf2_ros::filter_failure_reasons::OutTheBack: s << "scan older than the tf buffer"; break;
+      case tf2_ros::filter_failure_reasons::EmptyFrameID: s << "empty frame_id"; break;
+      default: s << "transform not available in time"; break;
+    }
+    s << ")";
+    uint64_t suppressed = 0;
+    if (health_.dropped("missing tf", &suppressed)) {
+      ROS_WARN("VerticalScanGround: %s (%lu more since the last message)", s.str().c_str(),
+               static_cast<unsigned long>(suppressed));
+    }
+  } catch (const std::exception& e) {
+    ROS_ERROR_THROTTLE(5.0, "VerticalScanGround: tf failure handler: %s", e.what());
+  }
+}
+
+void VerticalScanGroundRos::cloudCallback(const sensor_msgs::PointCloud2ConstPtr& msg) {
+  // No exception may leave a callback: it would take down every nodelet of the manager.
+  try {
+    process(msg);
+  } catch (const std::exception& e) {
+    reportError("internal error", e.what());
+  } catch (...) {
+    reportError("internal error", "unknown exception");
+  }
+}
+
+bool VerticalScanGroundRos::sensorPose(const sensor_msgs::PointCloud2& msg, SensorPose* pose) {
+  if (!use_tf_) {
+    *pose = SensorPose::fromHeight(sensor_height_);
+    return true;
+  }
+  geometry_msgs::TransformStamped t;
+  try {
+    t = tf_buffer_.lookupTransform(ground_frame_, msg.header.frame_id, msg.header.stamp);
+  } catch (const tf2::TransformException& e) {
+    if (health_.dropped("missing tf")) ROS_WARN("VerticalScanGround: %s", e.what());
+    return false;
+  }
+  // sensor -> ground frame; shift so the origin is the ground point under the sensor.
+  Eigen::Isometry3d sensor_to_ground = tf2::transformToEigen(t);
+  sensor_to_ground.translation().x() = 0.0;
+  sensor_to_ground.translation().y() = 0.0;
+  pose->sensor_to_ground = sensor_to_ground.cast<float>();
+  return true;
+}
+
+void VerticalScanGroundRos::process(const sensor_msgs::PointCloud2ConstPtr& msg) {
+  last_input_.store(msg.get());
+  rate_status_->tick();
+  std::lock_guard<std::mutex> process_lock(process_mutex_);
+  {
+    std::lock_guard<std::mutex> lock(config_mutex_);
+    if (config_changed_ || !model_) {
+      model_ = makeVerticalScanModel(toVerticalScanParams(config_));
+      sensor_height_ = static_cast<float>(config_.sensor_height);
+      config_changed_ = false;
+    }
+  }
+  CloudLayout layout;
+  PointCloudView view;
+  std::string error;
+  if (!viewOf(*msg, &layout, &view, &error)) {
+    reportError("unreadable cloud", "frame '" + msg->header.frame_id + "': " + error);
+    return;
+  }
+  SensorPose pose;
+  if (!sensorPose(*msg, &pose)) return;
+
+  const ros::WallTime start = ros::WallTime::now();
+  model_->classify(view, pose, &result_);
+  health_.processed((ros::WallTime::now() - start).toSec());
+
+  // Fresh messages, published as ConstPtr and never touched again.
+  if (ground_pub_.getNumSubscribers() > 0) {
+    ground_pub_.publish(sensor_msgs::PointCloud2ConstPtr(subsetCloud(*msg, view, result_, kLabelGround)));
+  }
+  if (obstacles_pub_.getNumSubscribers() > 0) {
+    obstacles_pub_.publish(
+        sensor_msgs::PointCloud2ConstPtr(subsetCloud(*msg, view, result_, kLabelObstacle)));
+  }
+  if (classified_pub_.getNumSubscribers() > 0) {
+    sensor_msgs::PointCloud2ConstPtr classified = classifiedCloud(*msg, view, result_);
+    {
+      std::lock_guard<std::mutex> lock(last_mutex_);
+      last_classified_ = classified;
+    }
+    classified_pub_.publish(classified);
+  }
+}
+
+void VerticalScanGroundRos::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) {
+  health_.fillDiagnostics(status);
+  std::lock_guard<std::mutex> lock(config_mutex_);
+  status.add("method", config_.method);
+  status.add("ground frame", use_tf_ ? ground_frame_ : std::string("(tf off)"));
+}
+
+}  // namespace ladar_perception
