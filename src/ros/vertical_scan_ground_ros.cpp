@@ -121,8 +121,8 @@ void VerticalScanGroundRos::reconfigure(VerticalScanGroundConfig& config, uint32
   if (!initial && config.method != last_method_) {
     // A new method: load its settings into every threshold (the user tunes from there).
     loadMethodSettings(config.method, &config);
-  } else if (initial && config.method != "default") {
-    // Start-up with a non-default method: its settings, except thresholds given explicitly.
+  } else if (initial) {
+    // Start-up: the method's settings, except thresholds given explicitly as parameters.
     loadMethodSettings(config.method, &config);
     for (const auto& param : VerticalScanGroundConfig::__getParamDescriptions__()) {
       if (param->name != "method" && private_nh_.hasParam(param->name)) {
