@@ -1,0 +1,113 @@
+// Calibration of one range sensor against another (thesis ch. 4, Algorithm 2), tying together
+// accumulation, features, error metrics, the search methods, the refinement and the
+// observability check. ROS-free: the nodelet, the offline tool and the benchmark all call
+// calibrate().
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "ladar_perception/calibration/accumulation.h"
+#include "ladar_perception/calibration/error_metrics.h"
+#include "ladar_perception/calibration/features.h"
+#include "ladar_perception/calibration/observability.h"
+#include "ladar_perception/calibration/pose.h"
+#include "ladar_perception/calibration/refinement.h"
+#include "ladar_perception/calibration/search.h"
+
+namespace ladar_perception {
+namespace calibration {
+
+// The data: both sensors' scans with vehicle poses, and the reference's known extrinsic
+// (base_link -> reference sensor).
+struct CalibrationInput {
+  ScanSet reference;
+  Eigen::Isometry3d reference_extrinsic = Eigen::Isometry3d::Identity();
+  ScanSet target;
+};
+
+enum class Metric {
+  kClosestPoint,   // trimmed closest point (eq 4.1) between the feature sets (Algorithm 4)
+  kAverageHeight,  // average height in grid (4.5.2)
+};
+// "closest_point", "average_height"; false when unknown.
+bool parseMetric(const std::string& name, Metric* metric);
+
+struct CalibrationParams {
+  // One of methodNames(); "" or "default" = the default (coarse_to_fine).
+  std::string method = "coarse_to_fine";
+  Pose6 initial = Pose6::Zero();  // base_link -> target sensor, the initial guess
+  Pose6 spread = (Pose6() << 1.0, 1.0, 1.0, 0.2, 0.2, 0.2).finished();
+  // The hypothesis score of the searches.
+  Metric metric = Metric::kClosestPoint;
+  double bin_size = 3.0;         // feature bin [m] (2-4 m worked best)
+  double trim_fraction = 0.5;    // eq 4.1 Fraction
+  double feature_voxel = 0.25;   // clouds thinned to this before feature extraction [m]
+  bool use_minima = true;        // score local minima as well as maxima
+  SearchParams search;           // initial/spread are overwritten from the fields above
+  RefinementParams refinement;
+  ObservabilityParams observability;
+  // The coarse stage of the default method stops once its spread is below this.
+  Pose6 coarse_min_spread = (Pose6() << 0.05, 0.05, 0.05, 0.01, 0.01, 0.01).finished();
+  int coarse_max_iterations = 25;
+};
+
+// The thesis's particle filter settings (4.4.4, 5.2.1 tuned): 3 m bins, 100 hypotheses per step,
+// 10 resampling centres, trimmed closest point over maxima and minima, no refinement.
+CalibrationParams thesisParticleFilterParams();
+
+struct CalibrationResult {
+  bool success = false;
+  std::string message;
+  Pose6 extrinsic = Pose6::Zero();  // base_link -> target sensor
+  Pose6 stddev = Pose6::Zero();     // per DOF; infinity when unobservable
+  double final_cost = 0;            // the method's own cost at the solution
+  std::vector<std::string> unobservable;
+  double elapsed = 0;               // seconds
+  std::string method;
+  long evaluations = 0;
+  std::vector<Pose6> trace;         // the estimate after each iteration of every stage
+  SearchResult search;
+  RefinementResult refinement;
+  Observability observability;
+};
+
+// Method names selectable in CalibrationParams::method: coarse_to_fine (default), refine,
+// particle_filter, interval, semi_independent, gradient, gradient_multiscale.
+const std::vector<std::string>& methodNames();
+bool isMethod(const std::string& name);
+std::string defaultMethod();
+
+// The hypothesis score of the searches: the reference accumulated once (its extrinsic is known),
+// features and KD-trees built once; per hypothesis the target is accumulated, its features
+// extracted and compared. Not thread-safe (reuses buffers).
+class HypothesisCost {
+ public:
+  HypothesisCost(const CalibrationInput& input, const CalibrationParams& params);
+  double operator()(const Pose6& target_extrinsic);
+  bool valid() const { return valid_; }
+
+ private:
+  CalibrationParams params_;
+  ScanSet target_;
+  FeatureExtractor extractor_;
+  KdTree ref_maxima_, ref_minima_;
+  HeightGrid ref_grid_;
+  PointVector accumulated_;
+  FeatureSet features_;
+  std::vector<float> scratch_;
+  bool valid_ = false;
+};
+
+// Runs the method. Progress is reported after each iteration of each stage; returning false
+// from it cancels (the result then says so). Never throws on bad data: success false + message.
+CalibrationResult calibrate(const CalibrationInput& input, const CalibrationParams& params,
+                            const ProgressFn& progress = nullptr);
+
+// Repeatability: the scans are split into `windows` disjoint time windows, each refined from the
+// full solution; returns the per-DOF standard deviation of the window solutions.
+Pose6 repeatability(const CalibrationInput& input, const CalibrationParams& params,
+                    const Pose6& solution, int windows, std::vector<Pose6>* window_solutions = nullptr);
+
+}  // namespace calibration
+}  // namespace ladar_perception

@@ -1,0 +1,51 @@
+// Observability check from the curvature of the cost at the solution: the eigenvalues of the
+// Gauss-Newton Hessian J^T W J (rotations scaled by the lever arm so metres and radians compare).
+// Directions whose curvature is a small fraction of the strongest are ones the scene cannot fix
+// (the long axis of an alley; x, y and yaw over a flat plane); the DOFs lying mostly in that weak
+// subspace are named, and their standard deviations are infinite instead of a made-up figure.
+#pragma once
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "ladar_perception/calibration/pose.h"
+
+namespace ladar_perception {
+namespace calibration {
+
+struct ObservabilityParams {
+  // A scaled eigenvalue below this fraction of the largest is a weak direction.
+  double relative_threshold = 0.01;
+  // A DOF is unobservable when at least this fraction of its unit vector lies in the weak subspace.
+  double min_projection = 0.5;
+  // Probe length for the measured curvature [m; radians are scaled by the lever arm].
+  double probe = 0.1;
+};
+
+// The cost at the solution moved by a step in (x, y, z, rotation) coordinates (see refinement.h).
+using CostAlong = std::function<double(const Pose6& step)>;
+
+struct Observability {
+  Pose6 stddev = Pose6::Zero();          // sqrt(diag(sigma^2 H^+)); infinity when unobservable
+  std::vector<int> unobservable;         // DOF indices
+  std::vector<std::string> unobservable_names;
+  Pose6 eigenvalues = Pose6::Zero();     // of the scaled, per-correspondence Hessian, ascending
+  Pose6 curvature = Pose6::Zero();       // measured along the same eigenvectors (or = eigenvalues)
+  double relative_min = 0;               // smallest / largest scaled eigenvalue
+  bool observable() const { return unobservable.empty(); }
+};
+
+// hessian: J^T W J in (x, y, z, rotation) coordinates; residual_variance: sigma^2 of a residual;
+// correspondences: number of residuals; lever_arm: metres per radian for the scaling.
+// When cost_along is given, the curvature along each eigenvector of the Hessian is measured on
+// the cost itself (central second difference, correspondences re-associated at each probe):
+// J^T W J alone credits the noise in the reference normals with information, so a flat plane
+// would seem to fix x and y a little; the measured curvature does not.
+Observability analyseObservability(const Matrix6& hessian, double residual_variance,
+                                   long correspondences, double lever_arm,
+                                   const ObservabilityParams& params = ObservabilityParams(),
+                                   const CostAlong& cost_along = nullptr);
+
+}  // namespace calibration
+}  // namespace ladar_perception

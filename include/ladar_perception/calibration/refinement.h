@@ -1,0 +1,88 @@
+// Refinement on the dense accumulated clouds (beyond the thesis): robust point-to-plane
+// Gauss-Newton / Levenberg-Marquardt. The reference cloud, accumulated in the odom frame through
+// its known extrinsic, becomes a surface model (points with normals from their neighbourhood,
+// KD-tree built once); every target point, projected through its scan's vehicle pose and the
+// hypothesis, gives the residual r = n . (p_odom - q) to its closest surface point q, weighted by
+// a Huber loss. The Gauss-Newton Hessian J^T W J at the solution is the cost's curvature that the
+// observability check reads.
+//
+// Parametrisation of a step: t += dt (base_link frame), R = Exp(dw) * R (rotation about the
+// sensor's origin, base_link axes), so steps map one to one onto x, y, z and, near a level
+// mount, roll, pitch, yaw.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "ladar_perception/calibration/accumulation.h"
+#include "ladar_perception/calibration/kdtree.h"
+#include "ladar_perception/calibration/pose.h"
+#include "ladar_perception/calibration/search.h"
+
+namespace ladar_perception {
+namespace calibration {
+
+struct RefinementParams {
+  double reference_voxel = 0.2;  // dense reference resolution [m]
+  double target_voxel = 0.3;     // dense target resolution, per scan in the sensor frame [m]
+  int max_target_points = 60000; // evenly thinned beyond this (speed bound)
+  int normal_neighbours = 16;
+  double normal_radius = 1.5;    // neighbours farther than this are not used for a normal [m]
+  double max_curvature = 0.04;   // lambda_min / sum(lambda) above this: not a surface point
+  double max_correspondence_start = 1.5;  // [m], shrinks linearly to the end value
+  double max_correspondence_end = 0.5;
+  double huber = 0.1;            // [m]
+  int max_iterations = 30;
+  double convergence = 1e-5;     // step norm (m, rad) below which it stops
+  double damping = 1e-4;         // Levenberg-Marquardt lambda relative to diag(H)
+};
+
+// Reference points with normals, ready for correspondences.
+class SurfaceModel {
+ public:
+  // points: the reference accumulated in the odom frame (already downsampled or not).
+  void build(const PointVector& points, const RefinementParams& params);
+  bool empty() const { return tree_.empty(); }
+  std::size_t size() const { return points_.size(); }
+  const KdTree& tree() const { return tree_; }
+  const PointVector& points() const { return points_; }
+  const PointVector& normals() const { return normals_; }
+
+ private:
+  PointVector points_, normals_;  // surface points only
+  KdTree tree_;
+};
+
+// The linearised problem at one hypothesis.
+struct Linearisation {
+  Matrix6 hessian = Matrix6::Zero();   // J^T W J
+  Pose6 gradient = Pose6::Zero();      // J^T W r
+  double cost = 0;                     // mean Huber loss over the correspondences
+  double residual_variance = 0;        // weighted mean r^2
+  long correspondences = 0;
+  double lever_arm = 1.0;              // RMS distance of the target points from their sensor [m]
+};
+
+Linearisation linearise(const SurfaceModel& model, const ScanSet& target, const Pose6& extrinsic,
+                        double max_correspondence, double huber);
+
+struct RefinementResult {
+  Pose6 extrinsic = Pose6::Zero();
+  Linearisation at_solution;
+  int iterations = 0;
+  bool converged = false;
+  bool cancelled = false;
+  std::vector<Pose6> trace;
+};
+
+// Applies a step in the parametrisation above.
+Pose6 applyStep(const Pose6& extrinsic, const Pose6& step);
+
+// The target scans thinned for the refinement (voxel per scan, then evenly to max_target_points).
+ScanSet refinementTarget(const ScanSet& target, const RefinementParams& params);
+
+RefinementResult refine(const SurfaceModel& model, const ScanSet& target, const Pose6& initial,
+                        const RefinementParams& params, const ProgressFn& progress = nullptr);
+
+}  // namespace calibration
+}  // namespace ladar_perception

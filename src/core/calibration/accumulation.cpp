@@ -1,0 +1,142 @@
+#include "ladar_perception/calibration/accumulation.h"
+
+#include <cmath>
+#include <unordered_map>
+
+namespace ladar_perception {
+namespace calibration {
+
+void ScanSet::clear() {
+  points.clear();
+  scan_begin.assign(1, 0);
+  vehicle_poses.clear();
+  stamps.clear();
+}
+
+void ScanSet::addScan(double stamp, const Eigen::Isometry3d& vehicle_pose,
+                      const PointVector& scan_points) {
+  addScan(stamp, vehicle_pose, scan_points.data(), scan_points.size());
+}
+
+void ScanSet::addScan(double stamp, const Eigen::Isometry3d& vehicle_pose,
+                      const Eigen::Vector3f* begin, std::size_t count) {
+  if (scan_begin.empty()) scan_begin.push_back(0);
+  points.insert(points.end(), begin, begin + count);
+  scan_begin.push_back(static_cast<uint32_t>(points.size()));
+  vehicle_poses.push_back(vehicle_pose);
+  stamps.push_back(stamp);
+}
+
+ScanSet ScanSet::subset(std::size_t first, std::size_t last) const {
+  ScanSet out;
+  last = std::min(last, numScans());
+  for (std::size_t k = first; k < last; ++k) {
+    out.addScan(stamps[k], vehicle_poses[k], points.data() + scan_begin[k],
+                scan_begin[k + 1] - scan_begin[k]);
+  }
+  return out;
+}
+
+void accumulate(const ScanSet& scans, const Eigen::Isometry3d& extrinsic, PointVector* out) {
+  out->resize(scans.numPoints());
+  for (std::size_t k = 0; k < scans.numScans(); ++k) {
+    const Eigen::Isometry3f m = (scans.vehicle_poses[k] * extrinsic).cast<float>();
+    const Eigen::Matrix3f r = m.linear();
+    const Eigen::Vector3f t = m.translation();
+    for (uint32_t i = scans.scan_begin[k]; i < scans.scan_begin[k + 1]; ++i) {
+      (*out)[i].noalias() = r * scans.points[i] + t;
+    }
+  }
+}
+
+namespace {
+struct VoxelSum {
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  int count = 0;
+};
+
+inline int64_t voxelKey(const Eigen::Vector3f& p, double inv) {
+  const int64_t ix = static_cast<int64_t>(std::floor(p.x() * inv)) & 0x1FFFFF;
+  const int64_t iy = static_cast<int64_t>(std::floor(p.y() * inv)) & 0x1FFFFF;
+  const int64_t iz = static_cast<int64_t>(std::floor(p.z() * inv)) & 0x1FFFFF;
+  return (ix << 42) | (iy << 21) | iz;
+}
+
+void downsampleInto(const Eigen::Vector3f* begin, std::size_t count, double voxel,
+                    std::unordered_map<int64_t, uint32_t>* index, std::vector<VoxelSum>* sums,
+                    PointVector* out) {
+  index->clear();
+  sums->clear();
+  const double inv = 1.0 / voxel;
+  for (std::size_t i = 0; i < count; ++i) {
+    const Eigen::Vector3f& p = begin[i];
+    if (!p.allFinite()) continue;
+    auto it = index->emplace(voxelKey(p, inv), static_cast<uint32_t>(sums->size()));
+    if (it.second) sums->emplace_back();
+    VoxelSum& s = (*sums)[it.first->second];
+    s.sum += p.cast<double>();
+    ++s.count;
+  }
+  for (const VoxelSum& s : *sums) out->push_back((s.sum / s.count).cast<float>());
+}
+}  // namespace
+
+PointVector voxelDownsample(const PointVector& points, double voxel) {
+  PointVector out;
+  if (!(voxel > 0)) {
+    out = points;
+    return out;
+  }
+  std::unordered_map<int64_t, uint32_t> index;
+  std::vector<VoxelSum> sums;
+  index.reserve(points.size() / 4 + 16);
+  downsampleInto(points.data(), points.size(), voxel, &index, &sums, &out);
+  return out;
+}
+
+ScanSet voxelDownsampleScans(const ScanSet& scans, double voxel) {
+  if (!(voxel > 0)) return scans;
+  ScanSet out;
+  std::unordered_map<int64_t, uint32_t> index;
+  std::vector<VoxelSum> sums;
+  PointVector scan;
+  for (std::size_t k = 0; k < scans.numScans(); ++k) {
+    scan.clear();
+    downsampleInto(scans.points.data() + scans.scan_begin[k],
+                   scans.scan_begin[k + 1] - scans.scan_begin[k], voxel, &index, &sums, &scan);
+    out.addScan(scans.stamps[k], scans.vehicle_poses[k], scan);
+  }
+  return out;
+}
+
+void pointsFromView(const PointCloudView& view, double min_range, double max_range,
+                    PointVector* out) {
+  out->clear();
+  out->reserve(view.size());
+  const float min2 = static_cast<float>(min_range * min_range);
+  const float max2 = static_cast<float>(max_range * max_range);
+  for (std::size_t i = 0; i < view.size(); ++i) {
+    const Eigen::Vector3f p = view.xyz(i);
+    if (!p.allFinite()) continue;
+    const float r2 = p.squaredNorm();
+    if (r2 < min2 || r2 > max2) continue;
+    out->push_back(p);
+  }
+}
+
+void pointsFromLaserScan(const float* ranges, std::size_t count, double angle_min,
+                         double angle_increment, double range_min, double range_max,
+                         PointVector* out) {
+  out->clear();
+  out->reserve(count);
+  for (std::size_t i = 0; i < count; ++i) {
+    const float r = ranges[i];
+    if (!std::isfinite(r) || r < range_min || r > range_max) continue;
+    const double a = angle_min + angle_increment * static_cast<double>(i);
+    out->emplace_back(static_cast<float>(r * std::cos(a)), static_cast<float>(r * std::sin(a)),
+                      0.f);
+  }
+}
+
+}  // namespace calibration
+}  // namespace ladar_perception

@@ -1,0 +1,266 @@
+#include "ladar_perception/calibration/calibrator.h"
+
+#include <chrono>
+#include <cmath>
+#include <sstream>
+
+namespace ladar_perception {
+namespace calibration {
+
+bool parseMetric(const std::string& name, Metric* metric) {
+  if (name == "closest_point") {
+    *metric = Metric::kClosestPoint;
+  } else if (name == "average_height") {
+    *metric = Metric::kAverageHeight;
+  } else {
+    return false;
+  }
+  return true;
+}
+
+const std::vector<std::string>& methodNames() {
+  static const std::vector<std::string> names = {
+      "coarse_to_fine", "refine",   "particle_filter",    "interval",
+      "semi_independent", "gradient", "gradient_multiscale"};
+  return names;
+}
+
+std::string defaultMethod() { return "coarse_to_fine"; }
+
+bool isMethod(const std::string& name) {
+  if (name.empty() || name == "default") return true;
+  for (const std::string& n : methodNames()) {
+    if (n == name) return true;
+  }
+  return false;
+}
+
+CalibrationParams thesisParticleFilterParams() {
+  CalibrationParams p;
+  p.method = "particle_filter";
+  p.metric = Metric::kClosestPoint;
+  p.bin_size = 3.0;
+  p.trim_fraction = 0.5;
+  p.use_minima = true;
+  p.search.particles_per_step = 100;
+  p.search.resampling_centres = 10;
+  p.search.max_iterations = 150;
+  p.search.min_spread << 0.01, 0.01, 0.01, 0.001, 0.001, 0.001;
+  return p;
+}
+
+HypothesisCost::HypothesisCost(const CalibrationInput& input, const CalibrationParams& params)
+    : params_(params), extractor_(params.bin_size) {
+  target_ = voxelDownsampleScans(input.target, params.feature_voxel);
+  PointVector reference;
+  accumulate(input.reference, input.reference_extrinsic, &reference);
+  reference = voxelDownsample(reference, params.feature_voxel);
+  if (reference.empty() || target_.empty()) return;
+  if (params.metric == Metric::kAverageHeight) {
+    ref_grid_.build(reference, params.bin_size);
+    valid_ = !ref_grid_.empty();
+    return;
+  }
+  FeatureSet ref_features;
+  extractor_.extract(reference, &ref_features);
+  ref_maxima_.build(ref_features.maxima);
+  ref_minima_.build(ref_features.minima);
+  valid_ = !ref_maxima_.empty();
+}
+
+double HypothesisCost::operator()(const Pose6& target_extrinsic) {
+  if (!valid_) return std::numeric_limits<double>::infinity();
+  accumulate(target_, toIsometry(target_extrinsic), &accumulated_);
+  if (params_.metric == Metric::kAverageHeight) return ref_grid_.error(accumulated_);
+  extractor_.extract(accumulated_, &features_);
+  if (features_.maxima.empty()) return std::numeric_limits<double>::infinity();
+  // eq 4.1 over the local maxima, and over the local minima when enabled; one trimmed mean
+  // over both sets so that each feature counts once.
+  scratch_.clear();
+  scratch_.reserve(2 * features_.maxima.size());
+  for (const Eigen::Vector3f& f : features_.maxima) {
+    float d2 = 0;
+    ref_maxima_.nearest(f, &d2);
+    scratch_.push_back(d2);
+  }
+  if (params_.use_minima) {
+    for (const Eigen::Vector3f& f : features_.minima) {
+      float d2 = 0;
+      ref_minima_.nearest(f, &d2);
+      scratch_.push_back(d2);
+    }
+  }
+  return trimmedMean(&scratch_, params_.trim_fraction);
+}
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+std::string joinNames(const std::vector<std::string>& names) {
+  std::string s;
+  for (const std::string& n : names) s += (s.empty() ? "" : ", ") + n;
+  return s;
+}
+
+}  // namespace
+
+CalibrationResult calibrate(const CalibrationInput& input, const CalibrationParams& params_in,
+                            const ProgressFn& progress) {
+  const auto t0 = Clock::now();
+  CalibrationResult out;
+  CalibrationParams params = params_in;
+  if (params.method.empty() || params.method == "default") params.method = defaultMethod();
+  out.method = params.method;
+  out.extrinsic = params.initial;
+  const auto finish = [&](CalibrationResult& r) -> CalibrationResult& {
+    r.elapsed = std::chrono::duration<double>(Clock::now() - t0).count();
+    return r;
+  };
+  if (!isMethod(params.method)) {
+    out.message = "unknown method '" + params.method + "'";
+    return finish(out);
+  }
+  if (input.reference.empty() || input.target.empty()) {
+    out.message = std::string("no data: ") + std::to_string(input.reference.numScans()) +
+                  " reference and " + std::to_string(input.target.numScans()) +
+                  " target scans with points";
+    return finish(out);
+  }
+  if (!params.initial.allFinite() || !params.spread.allFinite() || (params.spread.array() < 0).any()) {
+    out.message = "the initial guess and spread must be finite and the spread non-negative";
+    return finish(out);
+  }
+  SearchParams search = params.search;
+  search.initial = params.initial;
+  search.spread = params.spread;
+  for (int i = 0; i < 6; ++i) search.active[i] = search.active[i] && params.spread[i] > 0;
+
+  Pose6 estimate = params.initial;
+  bool cancelled = false;
+  const bool refine_only = params.method == "refine";
+  if (!refine_only) {
+    HypothesisCost cost_fn(input, params);
+    if (!cost_fn.valid()) {
+      out.message = "the reference gives no features (empty after thinning?)";
+      return finish(out);
+    }
+    const CostFn cost = [&cost_fn](const Pose6& p) { return cost_fn(p); };
+    if (params.method == "coarse_to_fine") {
+      search.min_spread = params.coarse_min_spread;
+      search.max_iterations = params.coarse_max_iterations;
+      search.patience = std::max(search.patience, 6);
+      out.search = particleFilter(cost, search, progress);
+    } else if (params.method == "particle_filter") {
+      out.search = particleFilter(cost, search, progress);
+    } else if (params.method == "interval") {
+      out.search = intervalSearch(cost, search, progress);
+    } else if (params.method == "semi_independent") {
+      out.search = semiIndependentIntervalSearch(cost, search, progress);
+    } else if (params.method == "gradient") {
+      out.search = gradientDescent(cost, search, progress);
+    } else {
+      out.search = multiScaleGradientDescent(cost, search, progress);
+    }
+    estimate = out.search.best;
+    out.final_cost = out.search.best_cost;
+    out.evaluations = out.search.evaluations;
+    out.trace = out.search.trace;
+    cancelled = out.search.cancelled;
+  }
+
+  // The dense surface model serves the refinement and the observability check of every method.
+  PointVector reference;
+  accumulate(input.reference, input.reference_extrinsic, &reference);
+  reference = voxelDownsample(reference, params.refinement.reference_voxel);
+  SurfaceModel model;
+  model.build(reference, params.refinement);
+  const ScanSet target = refinementTarget(input.target, params.refinement);
+  Linearisation lin;
+  if (!cancelled && (refine_only || params.method == "coarse_to_fine")) {
+    out.refinement = refine(model, target, estimate, params.refinement, progress);
+    cancelled = out.refinement.cancelled;
+    estimate = out.refinement.extrinsic;
+    out.trace.insert(out.trace.end(), out.refinement.trace.begin(), out.refinement.trace.end());
+    out.evaluations += out.refinement.iterations;
+    lin = out.refinement.at_solution;
+    out.final_cost = lin.cost;
+  } else {
+    lin = linearise(model, target, estimate, params.refinement.max_correspondence_end,
+                    params.refinement.huber);
+  }
+  const double max_corr = params.refinement.max_correspondence_end;
+  const CostAlong cost_along = [&](const Pose6& step) {
+    return linearise(model, target, applyStep(estimate, step), max_corr, params.refinement.huber)
+        .cost;
+  };
+  out.observability = analyseObservability(lin.hessian, lin.residual_variance,
+                                           lin.correspondences, lin.lever_arm,
+                                           params.observability, cost_along);
+  out.stddev = out.observability.stddev;
+  out.unobservable = out.observability.unobservable_names;
+  // DOFs the scene cannot fix keep the initial guess rather than wherever the search drifted.
+  for (int d : out.observability.unobservable) estimate[d] = params.initial[d];
+  out.extrinsic = estimate;
+
+  std::ostringstream msg;
+  if (cancelled) {
+    msg << "cancelled";
+  } else if (lin.correspondences < 100) {
+    msg << "too few correspondences between the clouds at the solution (" << lin.correspondences
+        << "): do the sensors see the same surfaces?";
+  } else if (!out.unobservable.empty()) {
+    msg << "the scene cannot fix " << joinNames(out.unobservable)
+        << " (cost curvature " << out.observability.relative_min
+        << " of the strongest); those DOFs keep the initial guess; the others are calibrated";
+  } else {
+    out.success = true;
+    msg << params.method << ": " << out.evaluations << " evaluations, final cost "
+        << out.final_cost;
+  }
+  out.message = msg.str();
+  finish(out);
+  if (!out.message.empty() && out.success) {
+    std::ostringstream t;
+    t << out.message << ", " << out.elapsed << " s";
+    out.message = t.str();
+  }
+  return out;
+}
+
+Pose6 repeatability(const CalibrationInput& input, const CalibrationParams& params,
+                    const Pose6& solution, int windows, std::vector<Pose6>* window_solutions) {
+  Pose6 spread = Pose6::Constant(std::numeric_limits<double>::quiet_NaN());
+  const std::size_t n = std::min(input.reference.numScans(), input.target.numScans());
+  windows = std::max(2, windows);
+  if (n < static_cast<std::size_t>(windows)) return spread;
+  std::vector<Pose6> sols;
+  for (int w = 0; w < windows; ++w) {
+    // Disjoint windows by time: scan indices [w n / W, (w+1) n / W) of each sensor.
+    CalibrationInput part;
+    part.reference_extrinsic = input.reference_extrinsic;
+    const std::size_t nr = input.reference.numScans(), nt = input.target.numScans();
+    part.reference = input.reference.subset(w * nr / windows, (w + 1) * nr / windows);
+    part.target = input.target.subset(w * nt / windows, (w + 1) * nt / windows);
+    PointVector reference;
+    accumulate(part.reference, part.reference_extrinsic, &reference);
+    reference = voxelDownsample(reference, params.refinement.reference_voxel);
+    SurfaceModel model;
+    model.build(reference, params.refinement);
+    const ScanSet target = refinementTarget(part.target, params.refinement);
+    RefinementParams rp = params.refinement;
+    rp.max_correspondence_start = rp.max_correspondence_end;
+    sols.push_back(refine(model, target, solution, rp).extrinsic);
+  }
+  Pose6 mean = Pose6::Zero();
+  for (const Pose6& s : sols) mean += s;
+  mean /= sols.size();
+  Pose6 var = Pose6::Zero();
+  for (const Pose6& s : sols) var += poseDifference(s, mean).cwiseAbs2();
+  spread = (var / static_cast<double>(sols.size() - 1)).cwiseSqrt();
+  if (window_solutions) *window_solutions = sols;
+  return spread;
+}
+
+}  // namespace calibration
+}  // namespace ladar_perception

@@ -1,0 +1,80 @@
+#include "ladar_perception/calibration/observability.h"
+
+#include <array>
+#include <cmath>
+#include <limits>
+
+#include <Eigen/Eigenvalues>
+
+namespace ladar_perception {
+namespace calibration {
+
+Observability analyseObservability(const Matrix6& hessian, double residual_variance,
+                                   long correspondences, double lever_arm,
+                                   const ObservabilityParams& params,
+                                   const CostAlong& cost_along) {
+  Observability out;
+  const double inf = std::numeric_limits<double>::infinity();
+  if (correspondences <= 0 || !hessian.allFinite()) {
+    out.stddev.setConstant(inf);
+    for (int i = 0; i < 6; ++i) {
+      out.unobservable.push_back(i);
+      out.unobservable_names.push_back(dofName(i));
+    }
+    return out;
+  }
+  // u = S^-1 * (t, w) with S = diag(1,1,1,1/L,1/L,1/L): rotations in metres at the lever arm.
+  Pose6 s;
+  const double l = std::max(lever_arm, 1e-3);
+  s << 1, 1, 1, 1 / l, 1 / l, 1 / l;
+  const Matrix6 hs = s.asDiagonal() * hessian * s.asDiagonal() / static_cast<double>(correspondences);
+  Eigen::SelfAdjointEigenSolver<Matrix6> es(hs);
+  out.eigenvalues = es.eigenvalues();
+  out.curvature = out.eigenvalues;
+  if (cost_along) {
+    const double c0 = cost_along(Pose6::Zero());
+    const double h = params.probe;
+    for (int k = 0; k < 6; ++k) {
+      const Pose6 step = s.asDiagonal() * (h * es.eigenvectors().col(k));
+      const double c = (cost_along(step) + cost_along(-step) - 2.0 * c0) / (h * h);
+      out.curvature[k] = std::isfinite(c) ? std::max(0.0, c) : 0.0;
+    }
+  }
+  const double top = std::max(out.curvature.maxCoeff(), 1e-300);
+  out.relative_min = out.curvature.minCoeff() / top;
+  Matrix6 weak_projector = Matrix6::Zero();
+  Matrix6 pinv = Matrix6::Zero();  // pseudo-inverse over the strong directions
+  for (int k = 0; k < 6; ++k) {
+    const Pose6 v = es.eigenvectors().col(k);
+    if (out.curvature[k] < params.relative_threshold * top) {
+      weak_projector += v * v.transpose();
+    } else {
+      pinv += v * v.transpose() / std::max(out.eigenvalues[k], 1e-300);
+    }
+  }
+  // Back to (t, w) units; the per-correspondence normalisation comes off with 1/N.
+  const Matrix6 cov = s.asDiagonal() * pinv * s.asDiagonal() * residual_variance /
+                      static_cast<double>(correspondences);
+  // Each weak direction names at least its dominant DOF, even when it mixes several.
+  std::array<bool, 6> weak_dof{};
+  for (int i = 0; i < 6; ++i) weak_dof[i] = weak_projector(i, i) >= params.min_projection;
+  for (int k = 0; k < 6; ++k) {
+    if (out.curvature[k] >= params.relative_threshold * top) continue;
+    int dominant = 0;
+    es.eigenvectors().col(k).cwiseAbs().maxCoeff(&dominant);
+    weak_dof[dominant] = true;
+  }
+  for (int i = 0; i < 6; ++i) {
+    if (weak_dof[i]) {
+      out.unobservable.push_back(i);
+      out.unobservable_names.push_back(dofName(i));
+      out.stddev[i] = inf;
+    } else {
+      out.stddev[i] = std::sqrt(std::max(0.0, cov(i, i)));
+    }
+  }
+  return out;
+}
+
+}  // namespace calibration
+}  // namespace ladar_perception

@@ -1,0 +1,172 @@
+#include "ladar_perception/calibration/refinement.h"
+
+#include <cmath>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+
+namespace ladar_perception {
+namespace calibration {
+
+void SurfaceModel::build(const PointVector& points, const RefinementParams& params) {
+  points_.clear();
+  normals_.clear();
+  KdTree all(points);
+  std::vector<int> idx;
+  std::vector<float> d2;
+  const int k = std::max(5, params.normal_neighbours);
+  const float r2 = static_cast<float>(params.normal_radius * params.normal_radius);
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    all.knn(points[i], k, &idx, &d2);
+    int n = 0;
+    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+    for (std::size_t j = 0; j < idx.size(); ++j) {
+      if (d2[j] > r2) break;
+      mean += points[idx[j]].cast<double>();
+      ++n;
+    }
+    if (n < 5) continue;
+    mean /= n;
+    Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+    for (int j = 0; j < n; ++j) {
+      const Eigen::Vector3d d = points[idx[j]].cast<double>() - mean;
+      cov += d * d.transpose();
+    }
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(cov);
+    const Eigen::Vector3d ev = es.eigenvalues();  // ascending
+    const double sum = ev.sum();
+    if (!(sum > 0) || ev[0] / sum > params.max_curvature) continue;  // not a surface point
+    points_.push_back(mean.cast<float>());  // the local plane's centroid: noise averaged
+    normals_.push_back(es.eigenvectors().col(0).cast<float>());
+  }
+  tree_.build(points_);
+}
+
+Linearisation linearise(const SurfaceModel& model, const ScanSet& target, const Pose6& extrinsic,
+                        double max_correspondence, double huber) {
+  Linearisation lin;
+  if (model.empty()) return lin;
+  const Eigen::Isometry3d t_bs = toIsometry(extrinsic);
+  const Eigen::Matrix3d r_bs = t_bs.linear();
+  const float max2 = static_cast<float>(max_correspondence * max_correspondence);
+  Eigen::Matrix<double, 6, 6> h = Eigen::Matrix<double, 6, 6>::Zero();
+  Pose6 g = Pose6::Zero();
+  double loss = 0, wr2 = 0, wsum = 0, lever2 = 0;
+  long n = 0;
+  for (std::size_t k = 0; k < target.numScans(); ++k) {
+    const Eigen::Isometry3d t_os = target.vehicle_poses[k] * t_bs;
+    const Eigen::Matrix3f r_os = t_os.linear().cast<float>();
+    const Eigen::Vector3f p_os = t_os.translation().cast<float>();
+    const Eigen::Matrix3d r_ob = target.vehicle_poses[k].linear();
+    for (uint32_t i = target.scan_begin[k]; i < target.scan_begin[k + 1]; ++i) {
+      const Eigen::Vector3f& ps = target.points[i];
+      const Eigen::Vector3f po = r_os * ps + p_os;
+      float d2 = 0;
+      const int j = model.tree().nearest(po, &d2, max2);
+      if (j < 0) continue;
+      const Eigen::Vector3d nrm = model.normals()[j].cast<double>();
+      const double r = nrm.dot((po - model.points()[j]).cast<double>());
+      const double ar = std::abs(r);
+      const double w = ar <= huber ? 1.0 : huber / ar;  // Huber weight (IRLS)
+      loss += ar <= huber ? 0.5 * r * r : huber * (ar - 0.5 * huber);
+      const Eigen::Vector3d m = r_ob.transpose() * nrm;  // normal in base_link axes
+      const Eigen::Vector3d lever = r_bs * ps.cast<double>();
+      Eigen::Matrix<double, 6, 1> jac;
+      jac.head<3>() = m;
+      jac.tail<3>() = lever.cross(m);
+      h.noalias() += w * jac * jac.transpose();
+      g.noalias() += w * r * jac;
+      wr2 += w * r * r;
+      wsum += w;
+      lever2 += lever.squaredNorm();
+      ++n;
+    }
+  }
+  lin.hessian = h;
+  lin.gradient = g;
+  lin.correspondences = n;
+  lin.cost = n > 0 ? loss / n : std::numeric_limits<double>::infinity();
+  lin.residual_variance = wsum > 0 ? wr2 / wsum : 0;
+  lin.lever_arm = n > 0 ? std::sqrt(lever2 / n) : 1.0;
+  return lin;
+}
+
+Pose6 applyStep(const Pose6& extrinsic, const Pose6& step) {
+  Eigen::Isometry3d t = toIsometry(extrinsic);
+  const Eigen::Vector3d w = step.tail<3>();
+  const double angle = w.norm();
+  if (angle > 0) t.linear() = Eigen::AngleAxisd(angle, w / angle).toRotationMatrix() * t.linear();
+  t.translation() += step.head<3>();
+  Pose6 out = fromIsometry(t);
+  return out;
+}
+
+ScanSet refinementTarget(const ScanSet& target, const RefinementParams& params) {
+  ScanSet thin = voxelDownsampleScans(target, params.target_voxel);
+  if (params.max_target_points <= 0 ||
+      thin.numPoints() <= static_cast<std::size_t>(params.max_target_points)) {
+    return thin;
+  }
+  const double stride = static_cast<double>(thin.numPoints()) / params.max_target_points;
+  ScanSet out;
+  PointVector scan;
+  double next = 0;
+  for (std::size_t k = 0; k < thin.numScans(); ++k) {
+    scan.clear();
+    for (uint32_t i = thin.scan_begin[k]; i < thin.scan_begin[k + 1]; ++i) {
+      if (i >= next) {
+        scan.push_back(thin.points[i]);
+        next += stride;
+      }
+    }
+    out.addScan(thin.stamps[k], thin.vehicle_poses[k], scan);
+  }
+  return out;
+}
+
+RefinementResult refine(const SurfaceModel& model, const ScanSet& target, const Pose6& initial,
+                        const RefinementParams& params, const ProgressFn& progress) {
+  RefinementResult res;
+  res.extrinsic = initial;
+  const int iters = std::max(1, params.max_iterations);
+  for (int it = 0; it < iters; ++it) {
+    // Correspondence distance shrinks over the first half, then stays at the end value.
+    const double f = std::min(1.0, it / std::max(1.0, 0.5 * iters));
+    const double max_corr = params.max_correspondence_start +
+                            f * (params.max_correspondence_end - params.max_correspondence_start);
+    const Linearisation lin =
+        linearise(model, target, res.extrinsic, max_corr, params.huber);
+    if (lin.correspondences < 6) break;
+    Matrix6 a = lin.hessian;
+    const double floor = 1e-9 * std::max(1e-12, a.diagonal().maxCoeff());
+    for (int i = 0; i < 6; ++i) a(i, i) += params.damping * a(i, i) + floor;
+    const Pose6 step = -a.ldlt().solve(lin.gradient);
+    if (!step.allFinite()) break;
+    res.extrinsic = applyStep(res.extrinsic, step);
+    res.iterations = it + 1;
+    res.trace.push_back(res.extrinsic);
+    if (progress) {
+      SearchProgress p;
+      p.stage = "refinement";
+      p.iteration = it + 1;
+      p.evaluations = it + 1;
+      p.best_cost = lin.cost;
+      p.estimate = res.extrinsic;
+      p.spread = step.cwiseAbs();
+      if (!progress(p)) {
+        res.cancelled = true;
+        break;
+      }
+    }
+    if (f >= 1.0 && step.norm() < params.convergence) {
+      res.converged = true;
+      break;
+    }
+  }
+  res.at_solution =
+      linearise(model, target, res.extrinsic, params.max_correspondence_end, params.huber);
+  return res;
+}
+
+}  // namespace calibration
+}  // namespace ladar_perception

@@ -1,0 +1,309 @@
+// Unit tests of the calibration core on hand-made clouds (no simulator, no ROS).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "ladar_perception/calibration/calibrator.h"
+
+namespace lp = ladar_perception;
+namespace cal = ladar_perception::calibration;
+
+namespace {
+
+// A hilly terrain with a few Gaussian hills of different sizes: every DOF is observable.
+double hills(double x, double y) {
+  return 3.0 * std::exp(-((x - 8) * (x - 8) + (y - 3) * (y - 3)) / 8.0) +
+         2.5 * std::exp(-((x + 6) * (x + 6) + (y + 9) * (y + 9)) / 5.0) +
+         3.0 * std::exp(-((x - 1) * (x - 1) + (y + 12) * (y + 12)) / 12.0) +
+         2.0 * std::exp(-((x + 10) * (x + 10) + (y - 8) * (y - 8)) / 3.0) +
+         2.0 * std::exp(-((x - 2) * (x - 2) + (y - 14) * (y - 14)) / 4.0) + 0.05 * x;
+}
+double flat(double, double) { return 0.0; }
+// An alley along x: flat floor, walls at |y| > 4 rising 3 m (a steep smooth step).
+double alley(double, double y) { return 3.0 / (1.0 + std::exp(-(std::abs(y) - 4.0) * 6.0)); }
+
+// Samples the surface z = f(x, y) around the sensor on a jittered grid and returns the points in
+// the sensor frame of `odom_to_sensor`.
+template <typename F>
+lp::calibration::PointVector sampleScan(F f, const Eigen::Isometry3d& odom_to_sensor,
+                                        double radius, double spacing, double noise,
+                                        std::mt19937* rng) {
+  std::uniform_real_distribution<double> jitter(-0.5 * spacing, 0.5 * spacing);
+  std::normal_distribution<double> n(0.0, noise);
+  const Eigen::Vector3d c = odom_to_sensor.translation();
+  const Eigen::Isometry3d inv = odom_to_sensor.inverse();
+  cal::PointVector out;
+  for (double x = c.x() - radius; x <= c.x() + radius; x += spacing) {
+    for (double y = c.y() - radius; y <= c.y() + radius; y += spacing) {
+      const double px = x + jitter(*rng), py = y + jitter(*rng);
+      if ((px - c.x()) * (px - c.x()) + (py - c.y()) * (py - c.y()) > radius * radius) continue;
+      const Eigen::Vector3d p(px, py, f(px, py) + (noise > 0 ? n(*rng) : 0.0));
+      out.push_back((inv * p).cast<float>());
+    }
+  }
+  return out;
+}
+
+template <typename F>
+cal::CalibrationInput makeInput(F f, const cal::Pose6& reference, const cal::Pose6& target,
+                                int scans, double noise, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  cal::CalibrationInput in;
+  in.reference_extrinsic = cal::toIsometry(reference);
+  const Eigen::Isometry3d t_target = cal::toIsometry(target);
+  for (int k = 0; k < scans; ++k) {
+    const Eigen::Isometry3d vehicle =
+        cal::toIsometry(cal::makePose(3 * u(rng), 3 * u(rng), 0, 0, 0, 0.4 * u(rng)));
+    in.reference.addScan(k, vehicle,
+                         sampleScan(f, vehicle * in.reference_extrinsic, 18.0, 0.35, noise, &rng));
+    in.target.addScan(k, vehicle, sampleScan(f, vehicle * t_target, 18.0, 0.35, noise, &rng));
+  }
+  return in;
+}
+
+const cal::Pose6 kReference = cal::makePose(0, 0, 2.0, 0, 0, 0);
+const cal::Pose6 kTarget = cal::makePose(1.0, 0.1, 1.8, 0.03, -0.02, 0.05);
+
+}  // namespace
+
+TEST(CalibrationPose, RoundTripAndNames) {
+  const cal::Pose6 p = cal::makePose(1, -2, 3, 0.1, -0.2, 2.5);
+  const cal::Pose6 q = cal::fromIsometry(cal::toIsometry(p));
+  EXPECT_LT((p - q).norm(), 1e-12);
+  EXPECT_STREQ(cal::dofName(cal::kYaw), "yaw");
+  EXPECT_EQ(cal::dofIndex("pitch"), cal::kPitch);
+  EXPECT_EQ(cal::dofIndex("bogus"), -1);
+  EXPECT_NEAR(cal::wrapAngle(3 * M_PI), M_PI, 1e-12);
+  EXPECT_NEAR(cal::poseDifference(cal::makePose(0, 0, 0, 0, 0, 3.1),
+                                  cal::makePose(0, 0, 0, 0, 0, -3.1))[cal::kYaw],
+              -2 * M_PI + 6.2, 1e-12);
+}
+
+TEST(CalibrationAccumulation, ProjectsThroughVehiclePoseAndExtrinsic) {
+  cal::ScanSet scans;
+  const Eigen::Isometry3d v1 = cal::toIsometry(cal::makePose(10, 0, 0, 0, 0, M_PI / 2));
+  scans.addScan(0.0, Eigen::Isometry3d::Identity(), cal::PointVector{{1, 0, 0}});
+  scans.addScan(0.1, v1, cal::PointVector{{1, 0, 0}, {0, 1, 0}});
+  const Eigen::Isometry3d ext = cal::toIsometry(cal::makePose(1, 0, 2, 0, 0, 0));
+  cal::PointVector out;
+  cal::accumulate(scans, ext, &out);
+  ASSERT_EQ(out.size(), 3u);
+  EXPECT_LT((out[0] - Eigen::Vector3f(2, 0, 2)).norm(), 1e-5);
+  // Vehicle at (10,0) facing +y: sensor at base (1,0,2) -> odom (10,1,2); its x axis is odom +y.
+  EXPECT_LT((out[1] - Eigen::Vector3f(10, 2, 2)).norm(), 1e-5);
+  EXPECT_LT((out[2] - Eigen::Vector3f(9, 1, 2)).norm(), 1e-5);
+  const cal::ScanSet second = scans.subset(1, 2);
+  EXPECT_EQ(second.numScans(), 1u);
+  EXPECT_EQ(second.numPoints(), 2u);
+}
+
+TEST(CalibrationAccumulation, VoxelCentroidsAndLaserScan) {
+  const cal::PointVector pts = {{0.1f, 0.1f, 0.1f}, {0.3f, 0.3f, 0.3f}, {1.5f, 0.1f, 0.1f}};
+  cal::PointVector v = cal::voxelDownsample(pts, 1.0);
+  ASSERT_EQ(v.size(), 2u);
+  const bool first = (v[0] - Eigen::Vector3f(0.2f, 0.2f, 0.2f)).norm() < 1e-6 ||
+                     (v[1] - Eigen::Vector3f(0.2f, 0.2f, 0.2f)).norm() < 1e-6;
+  EXPECT_TRUE(first);
+  const float ranges[4] = {1.0f, NAN, 100.0f, 2.0f};
+  cal::PointVector scan;
+  cal::pointsFromLaserScan(ranges, 4, -M_PI / 2, M_PI / 2, 0.5, 80.0, &scan);
+  ASSERT_EQ(scan.size(), 2u);  // NaN and out of range dropped
+  EXPECT_LT((scan[0] - Eigen::Vector3f(0, -1, 0)).norm(), 1e-6);
+  EXPECT_LT((scan[1] - Eigen::Vector3f(-2, 0, 0)).norm(), 1e-5);
+}
+
+TEST(CalibrationKdTree, MatchesBruteForce) {
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> u(-20, 20);
+  cal::PointVector pts(2000);
+  for (auto& p : pts) p = Eigen::Vector3f(u(rng), u(rng), 0.1f * u(rng));
+  cal::KdTree tree(pts);
+  std::vector<int> idx;
+  std::vector<float> d2;
+  for (int q = 0; q < 200; ++q) {
+    const Eigen::Vector3f query(u(rng), u(rng), u(rng));
+    int best = -1;
+    float best_d2 = 1e30f;
+    for (std::size_t i = 0; i < pts.size(); ++i) {
+      const float d = (pts[i] - query).squaredNorm();
+      if (d < best_d2) { best_d2 = d; best = static_cast<int>(i); }
+    }
+    float got = 0;
+    EXPECT_EQ(tree.nearest(query, &got), best);
+    EXPECT_FLOAT_EQ(got, best_d2);
+    tree.knn(query, 5, &idx, &d2);
+    ASSERT_EQ(idx.size(), 5u);
+    EXPECT_EQ(idx[0], best);
+    for (int j = 1; j < 5; ++j) EXPECT_LE(d2[j - 1], d2[j]);
+  }
+  float d = 0;
+  EXPECT_EQ(tree.nearest(Eigen::Vector3f(100, 100, 100), &d, 1.0f), -1);  // beyond max distance
+}
+
+TEST(CalibrationFeatures, LocalMaximaAndMinimaPerBin) {
+  // Two bins of 2 m: [0,2)x[0,2) and [2,4)x[0,2).
+  const cal::PointVector pts = {{0.5f, 0.5f, 1.0f}, {1.5f, 1.5f, 3.0f}, {1.0f, 0.2f, -1.0f},
+                                {2.5f, 0.5f, 0.5f}, {3.5f, 1.0f, 0.7f}};
+  const cal::FeatureSet f = cal::extractFeatures(pts, 2.0);
+  ASSERT_EQ(f.maxima.size(), 2u);
+  ASSERT_EQ(f.minima.size(), 2u);
+  EXPECT_FLOAT_EQ(f.maxima[0].z(), 3.0f);
+  EXPECT_FLOAT_EQ(f.minima[0].z(), -1.0f);
+  EXPECT_FLOAT_EQ(f.maxima[1].z(), 0.7f);
+  EXPECT_FLOAT_EQ(f.minima[1].z(), 0.5f);
+  EXPECT_TRUE(cal::extractFeatures({}, 2.0).maxima.empty());
+  // Negative coordinates bin from the origin too: (-0.5) and (0.5) fall in different bins.
+  EXPECT_EQ(cal::extractFeatures({{-0.5f, 0.f, 0.f}, {0.5f, 0.f, 0.f}}, 2.0).maxima.size(), 2u);
+}
+
+TEST(CalibrationErrorMetrics, TrimmedClosestPointEq41) {
+  const cal::PointVector ref = {{0, 0, 0}, {10, 0, 0}};
+  cal::KdTree tree(ref);
+  // Squared distances 1, 4, 9, 16 -> smallest half: (1 + 4) / 2.
+  const cal::PointVector cloud = {{0, 0, 1}, {10, 2, 0}, {0, 3, 0}, {14, 0, 0}};
+  EXPECT_DOUBLE_EQ(cal::trimmedClosestPoint(tree, cloud, 0.5), 2.5);
+  EXPECT_DOUBLE_EQ(cal::trimmedClosestPoint(tree, cloud, 1.0), 7.5);
+  EXPECT_TRUE(std::isinf(cal::trimmedClosestPoint(tree, {}, 0.5)));
+}
+
+TEST(CalibrationErrorMetrics, AverageHeightInGrid) {
+  cal::HeightGrid grid;
+  grid.build({{0.5f, 0.5f, 1.0f}, {0.6f, 0.4f, 3.0f}, {1.5f, 0.5f, 0.0f}}, 1.0);
+  // Bin (0,0): mean 2 vs 2.5 -> 0.25; bin (1,0): 0 vs 1 -> 1; bin (5,5) not in the reference.
+  const cal::PointVector target = {{0.2f, 0.2f, 2.5f}, {1.2f, 0.2f, 1.0f}, {5.5f, 5.5f, 9.0f}};
+  EXPECT_DOUBLE_EQ(grid.error(target), (0.25 + 1.0) / 2);
+  EXPECT_TRUE(std::isinf(grid.error({{50.f, 50.f, 0.f}})));
+}
+
+namespace {
+// A bowl with a known minimum and some ripple, as an easy synthetic case for every search method.
+struct Bowl {
+  cal::Pose6 truth = cal::makePose(0.4, -0.3, 0.2, 0.05, -0.08, 0.12);
+  double operator()(const cal::Pose6& p) const {
+    const cal::Pose6 d = p - truth;
+    cal::Pose6 s;
+    s << 1, 1, 1, 5, 5, 5;
+    return (d.cwiseProduct(s)).squaredNorm();
+  }
+};
+void expectRecovers(const cal::SearchResult& r, const Bowl& bowl, double tol_t, double tol_r) {
+  for (int i = 0; i < 3; ++i) EXPECT_NEAR(r.best[i], bowl.truth[i], tol_t) << cal::dofName(i);
+  for (int i = 3; i < 6; ++i) EXPECT_NEAR(r.best[i], bowl.truth[i], tol_r) << cal::dofName(i);
+  EXPECT_GT(r.evaluations, 0);
+  EXPECT_FALSE(r.trace.empty());
+}
+cal::SearchParams bowlParams() {
+  cal::SearchParams p;
+  p.spread << 1, 1, 1, 0.2, 0.2, 0.2;
+  p.min_spread << 0.005, 0.005, 0.005, 0.001, 0.001, 0.001;
+  p.max_iterations = 100;
+  return p;
+}
+}  // namespace
+
+TEST(CalibrationSearch, EveryMethodRecoversAKnownOffset) {
+  const Bowl bowl;
+  const cal::CostFn cost = [&bowl](const cal::Pose6& p) { return bowl(p); };
+  const cal::SearchParams p = bowlParams();
+  expectRecovers(cal::gradientDescent(cost, p), bowl, 0.03, 0.01);
+  expectRecovers(cal::multiScaleGradientDescent(cost, p), bowl, 0.02, 0.005);
+  expectRecovers(cal::intervalSearch(cost, p), bowl, 0.02, 0.005);
+  expectRecovers(cal::semiIndependentIntervalSearch(cost, p), bowl, 0.02, 0.005);
+  cal::SearchParams pf = p;
+  pf.max_iterations = 200;
+  const cal::SearchResult r = cal::particleFilter(cost, pf);
+  expectRecovers(r, bowl, 0.03, 0.01);
+  EXPECT_LT((r.weighted_mean - bowl.truth).head<3>().norm(), 0.3);
+}
+
+TEST(CalibrationSearch, ProgressCanCancel) {
+  const Bowl bowl;
+  int calls = 0;
+  const cal::SearchResult r = cal::intervalSearch(
+      [&bowl](const cal::Pose6& p) { return bowl(p); }, bowlParams(),
+      [&calls](const cal::SearchProgress& pr) { ++calls; return pr.iteration < 2; });
+  EXPECT_TRUE(r.cancelled);
+  EXPECT_EQ(calls, 2);
+}
+
+TEST(CalibrationRefinement, PointToPlaneRecoversOffsetOnHills) {
+  const cal::CalibrationInput in = makeInput(hills, kReference, kTarget, 4, 0.02, 7);
+  cal::RefinementParams rp;
+  cal::PointVector ref;
+  cal::accumulate(in.reference, in.reference_extrinsic, &ref);
+  cal::SurfaceModel model;
+  model.build(cal::voxelDownsample(ref, rp.reference_voxel), rp);
+  ASSERT_GT(model.size(), 1000u);
+  const cal::Pose6 start = kTarget + cal::makePose(0.15, -0.1, 0.1, -0.01, 0.015, 0.02);
+  const cal::RefinementResult r = cal::refine(model, cal::refinementTarget(in.target, rp), start, rp);
+  const cal::Pose6 err = cal::poseDifference(r.extrinsic, kTarget);
+  for (int i = 0; i < 3; ++i) EXPECT_LT(std::abs(err[i]), 0.02) << cal::dofName(i);
+  for (int i = 3; i < 6; ++i) EXPECT_LT(std::abs(err[i]), 0.003) << cal::dofName(i);
+}
+
+TEST(CalibrationObservability, FlatPlaneAndAlleyAreNamed) {
+  cal::Matrix6 h = cal::Matrix6::Zero();
+  h.diagonal() << 1e-6, 1e-6, 100, 80, 90, 1e-7;  // a plane: only z, roll, pitch constrained
+  cal::Observability o = cal::analyseObservability(h, 0.01, 100, 1.0);
+  EXPECT_EQ(o.unobservable_names, (std::vector<std::string>{"x", "y", "yaw"}));
+  EXPECT_TRUE(std::isinf(o.stddev[cal::kX]));
+  EXPECT_NEAR(o.stddev[cal::kZ], std::sqrt(0.01 / 100), 1e-9);
+  h.setIdentity();
+  h *= 50;
+  h(0, 0) = 1e-4;  // alley along x
+  o = cal::analyseObservability(h, 0.01, 100, 1.0);
+  EXPECT_EQ(o.unobservable_names, (std::vector<std::string>{"x"}));
+  o = cal::analyseObservability(cal::Matrix6::Identity(), 0.01, 100, 1.0);
+  EXPECT_TRUE(o.observable());
+}
+
+TEST(CalibrationCalibrator, DefaultMethodOnHills) {
+  const cal::CalibrationInput in = makeInput(hills, kReference, kTarget, 6, 0.03, 11);
+  cal::CalibrationParams p;
+  p.initial = kTarget + cal::makePose(0.6, -0.5, 0.4, 0.1, -0.1, 0.15);
+  p.bin_size = 2.0;
+  int reports = 0;
+  const cal::CalibrationResult r =
+      cal::calibrate(in, p, [&reports](const cal::SearchProgress&) { ++reports; return true; });
+  EXPECT_TRUE(r.success) << r.message;
+  EXPECT_GT(reports, 0);
+  const cal::Pose6 err = cal::poseDifference(r.extrinsic, kTarget);
+  for (int i = 0; i < 3; ++i) EXPECT_LT(std::abs(err[i]), 0.03) << cal::dofName(i);
+  for (int i = 3; i < 6; ++i) EXPECT_LT(std::abs(err[i]), 0.005) << cal::dofName(i);
+  EXPECT_TRUE(r.unobservable.empty());
+  for (int i = 0; i < 6; ++i) EXPECT_TRUE(std::isfinite(r.stddev[i]));
+  const cal::Pose6 rep = cal::repeatability(in, p, r.extrinsic, 2);
+  EXPECT_LT(rep.head<3>().maxCoeff(), 0.05);
+}
+
+TEST(CalibrationCalibrator, DegenerateScenesAreReportedByName) {
+  cal::CalibrationParams p;
+  p.initial = kTarget + cal::makePose(0.1, 0.1, 0.05, 0.01, 0.01, 0.02);
+  p.method = "refine";
+  cal::CalibrationResult r = cal::calibrate(makeInput(flat, kReference, kTarget, 4, 0.02, 5), p);
+  EXPECT_FALSE(r.success);
+  EXPECT_EQ(r.unobservable, (std::vector<std::string>{"x", "y", "yaw"})) << r.message;
+  r = cal::calibrate(makeInput(alley, kReference, kTarget, 4, 0.02, 5), p);
+  EXPECT_FALSE(r.success);
+  EXPECT_EQ(r.unobservable, (std::vector<std::string>{"x"})) << r.message;
+}
+
+TEST(CalibrationCalibrator, BadInputIsAnsweredNotThrown) {
+  cal::CalibrationParams p;
+  cal::CalibrationResult r = cal::calibrate(cal::CalibrationInput(), p);
+  EXPECT_FALSE(r.success);
+  EXPECT_NE(r.message.find("no data"), std::string::npos);
+  p.method = "simulated_annealing";
+  r = cal::calibrate(makeInput(hills, kReference, kTarget, 1, 0.0, 1), p);
+  EXPECT_FALSE(r.success);
+  EXPECT_NE(r.message.find("unknown method"), std::string::npos);
+  EXPECT_TRUE(cal::isMethod("particle_filter"));
+  EXPECT_EQ(cal::defaultMethod(), "coarse_to_fine");
+}
+
+int main(int argc, char** argv) {
+  testing::InitGoogleTest(&argc, argv);
+  return RUN_ALL_TESTS();
+}
