@@ -1,0 +1,246 @@
+#include "ladar_perception/sim/scan_simulator.h"
+
+#include <cmath>
+#include <cstring>
+#include <limits>
+
+#include "ladar_perception/sim/random.h"
+#include "ladar_perception/sim/ray_caster.h"
+
+namespace ladar_perception {
+namespace sim {
+
+namespace {
+
+constexpr double kTwoPi = 6.283185307179586;
+
+inline void putFloat(uint8_t* p, float v) { std::memcpy(p, &v, 4); }
+
+// Sets *layout to `make(0)`'s fields unless it already has them, then sizes it to n points, so
+// a reused scan does not rebuild its field table.
+template <typename MakeLayout>
+void sizeLayout(CloudLayout* layout, uint32_t n, MakeLayout make) {
+  const CloudLayout ref = make(0);
+  bool same = layout->fields.size() == ref.fields.size() && layout->point_step == ref.point_step;
+  for (std::size_t k = 0; same && k < ref.fields.size(); ++k) {
+    same = layout->fields[k].name == ref.fields[k].name &&
+           layout->fields[k].offset == ref.fields[k].offset &&
+           layout->fields[k].datatype == ref.fields[k].datatype;
+  }
+  if (!same) *layout = ref;
+  layout->width = n;
+  layout->height = 1;
+  layout->row_step = layout->point_step * n;
+  layout->is_bigendian = false;
+}
+
+CloudLayout xyzLayout(uint32_t n) {
+  CloudLayout l;
+  l.width = n;
+  l.height = 1;
+  appendField(&l, "x", FieldType::kFloat32);
+  appendField(&l, "y", FieldType::kFloat32);
+  appendField(&l, "z", FieldType::kFloat32);
+  return l;
+}
+
+void clearScan(SimulatedScan* out, CloudLayout (*make)(uint32_t)) {
+  sizeLayout(&out->cloud.layout, 0, make);
+  out->cloud.data.clear();
+  out->truth.clear();
+}
+
+// Noisy range of ray `counter`, false when it falls outside [min, max].
+inline bool noisyRange(double true_range, double sigma, double min_range, double max_range,
+                       uint64_t seed, uint64_t counter, double* range) {
+  double r = true_range;
+  if (sigma > 0.0) r += sigma * gaussianAt(seed, counter);
+  *range = r;
+  return r >= min_range && r <= max_range;
+}
+
+void simulateVelodyne(const World& world, const Eigen::Isometry3d& start,
+                      const Eigen::Isometry3d* end, const VelodyneModel& model, uint64_t seed,
+                      SimulatedScan* out) {
+  if (!model.validate().empty() || !world.finalized()) {
+    clearScan(out, velodyneXYZIRTLayout);
+    return;
+  }
+  const int lasers = model.lasers();
+  const int steps = model.azimuth_steps;
+  // Per-laser trigonometry, kept between calls on this thread (no per-scan allocation once
+  // warm).
+  thread_local std::vector<double> cos_el, sin_el;
+  cos_el.resize(lasers);
+  sin_el.resize(lasers);
+  for (int l = 0; l < lasers; ++l) {
+    const double e = model.elevations_deg[l] * M_PI / 180.0;
+    cos_el[l] = std::cos(e);
+    sin_el[l] = std::sin(e);
+  }
+  const std::size_t max_points = model.raysPerRevolution();
+  const uint32_t step_bytes = 22;
+  out->cloud.data.resize(max_points * step_bytes);
+  out->truth.resize(max_points);
+  uint8_t* dst = out->cloud.data.data();
+  uint8_t* truth = out->truth.data();
+  std::size_t count = 0;
+  const Eigen::Quaterniond q0(start.linear());
+  const Eigen::Quaterniond q1(end ? Eigen::Quaterniond(end->linear()) : q0);
+  Eigen::Matrix3d R = start.linear();
+  Eigen::Vector3d origin = start.translation();
+  const double dt = model.period() / steps;
+  RayHit hit;
+  for (int k = 0; k < steps; ++k) {
+    const double az = model.start_azimuth - kTwoPi * k / steps;  // clockwise from above
+    const double ca = std::cos(az), sa = std::sin(az);
+    if (end) {
+      const double f = static_cast<double>(k) / steps;
+      R = q0.slerp(f, q1).toRotationMatrix();
+      origin = (1.0 - f) * start.translation() + f * end->translation();
+    }
+    const float time = static_cast<float>(k * dt);
+    for (int l = 0; l < lasers; ++l) {
+      const Eigen::Vector3d ds(cos_el[l] * ca, cos_el[l] * sa, sin_el[l]);
+      const Eigen::Vector3d dw = R * ds;
+      if (!castRay(world, origin, dw, model.max_range, &hit)) continue;
+      double r;
+      if (!noisyRange(hit.range, model.noise_sigma, model.min_range, model.max_range, seed,
+                      static_cast<uint64_t>(k) * lasers + l, &r)) {
+        continue;
+      }
+      const float cos_inc = static_cast<float>(std::abs(hit.normal.cast<double>().dot(dw)));
+      putFloat(dst + 0, static_cast<float>(ds.x() * r));
+      putFloat(dst + 4, static_cast<float>(ds.y() * r));
+      putFloat(dst + 8, static_cast<float>(ds.z() * r));
+      putFloat(dst + 12, returnIntensity(hit.surface, cos_inc));
+      const uint16_t ring = static_cast<uint16_t>(l);
+      std::memcpy(dst + 16, &ring, 2);
+      putFloat(dst + 18, time);
+      dst += step_bytes;
+      truth[count++] = static_cast<uint8_t>(hit.surface);
+    }
+  }
+  out->cloud.data.resize(count * step_bytes);
+  out->truth.resize(count);
+  sizeLayout(&out->cloud.layout, static_cast<uint32_t>(count), velodyneXYZIRTLayout);
+}
+
+}  // namespace
+
+float returnIntensity(SurfaceClass c, float cos_incidence) {
+  static const float kReflectivity[kNumSurfaceClasses] = {
+      0.20f,  // road
+      0.35f,  // sidewalk
+      0.25f,  // terrain
+      0.40f,  // curb
+      0.60f,  // car
+      0.45f,  // wall
+      0.30f,  // pole
+      0.35f,  // person
+      0.12f,  // pothole (wet, dark)
+  };
+  const int k = static_cast<int>(c);
+  const float refl = k < kNumSurfaceClasses ? kReflectivity[k] : 0.f;
+  return 255.f * refl * (0.3f + 0.7f * std::min(1.f, std::max(0.f, cos_incidence)));
+}
+
+void simulateVelodyneRevolution(const World& world, const Eigen::Isometry3d& sensor_in_world,
+                                const VelodyneModel& model, uint64_t seed, SimulatedScan* out) {
+  simulateVelodyne(world, sensor_in_world, nullptr, model, seed, out);
+}
+
+void simulateVelodyneRevolution(const World& world, const Eigen::Isometry3d& sensor_at_start,
+                                const Eigen::Isometry3d& sensor_at_end, const VelodyneModel& model,
+                                uint64_t seed, SimulatedScan* out) {
+  simulateVelodyne(world, sensor_at_start, &sensor_at_end, model, seed, out);
+}
+
+void simulateSickScan(const World& world, const Eigen::Isometry3d& sensor_in_world,
+                      const SickModel& model, uint64_t seed, SimulatedLaserScan* out) {
+  const int beams = model.validate().empty() && world.finalized() ? model.beams() : 0;
+  out->angle_min = static_cast<float>(model.angle_min);
+  out->angle_increment = static_cast<float>(model.angle_increment);
+  out->angle_max = static_cast<float>(model.angle_min + (beams > 0 ? beams - 1 : 0) * model.angle_increment);
+  out->scan_time = static_cast<float>(1.0 / model.rate_hz);
+  // The LMS-291 sweeps a full circle per scan period and measures over its 180 degrees.
+  out->time_increment = static_cast<float>(model.angle_increment / kTwoPi / model.rate_hz);
+  out->range_min = static_cast<float>(model.min_range);
+  out->range_max = static_cast<float>(model.max_range);
+  out->ranges.assign(beams, std::numeric_limits<float>::infinity());
+  out->intensities.assign(beams, 0.f);
+  out->beam_truth.assign(beams, static_cast<uint8_t>(SurfaceClass::kNone));
+  SimulatedScan& pts = out->points;
+  pts.cloud.data.resize(static_cast<std::size_t>(beams) * 16);
+  pts.truth.resize(beams);
+  uint8_t* dst = pts.cloud.data.data();
+  std::size_t count = 0;
+  const Eigen::Matrix3d R = sensor_in_world.linear();
+  const Eigen::Vector3d origin = sensor_in_world.translation();
+  RayHit hit;
+  for (int b = 0; b < beams; ++b) {
+    const double a = model.angle_min + b * model.angle_increment;
+    const Eigen::Vector3d ds(std::cos(a), std::sin(a), 0.0);
+    const Eigen::Vector3d dw = R * ds;
+    if (!castRay(world, origin, dw, model.max_range, &hit)) continue;
+    double r;
+    if (!noisyRange(hit.range, model.noise_sigma, model.min_range, model.max_range, seed, b, &r)) continue;
+    const float intensity =
+        returnIntensity(hit.surface, static_cast<float>(std::abs(hit.normal.cast<double>().dot(dw))));
+    out->ranges[b] = static_cast<float>(r);
+    out->intensities[b] = intensity;
+    out->beam_truth[b] = static_cast<uint8_t>(hit.surface);
+    putFloat(dst + 0, static_cast<float>(ds.x() * r));
+    putFloat(dst + 4, static_cast<float>(ds.y() * r));
+    putFloat(dst + 8, 0.f);
+    putFloat(dst + 12, intensity);
+    dst += 16;
+    pts.truth[count++] = static_cast<uint8_t>(hit.surface);
+  }
+  pts.cloud.data.resize(count * 16);
+  pts.truth.resize(count);
+  sizeLayout(&pts.cloud.layout, static_cast<uint32_t>(count), xyziLayout);
+}
+
+void simulateStereoFrame(const World& world, const Eigen::Isometry3d& sensor_in_world,
+                         const StereoModel& model, uint64_t seed, SimulatedScan* out) {
+  if (!model.validate().empty() || !world.finalized()) {
+    clearScan(out, xyzLayout);
+    return;
+  }
+  const std::size_t max_points = static_cast<std::size_t>(model.columns) * model.rows;
+  out->cloud.data.resize(max_points * 12);
+  out->truth.resize(max_points);
+  uint8_t* dst = out->cloud.data.data();
+  std::size_t count = 0;
+  const Eigen::Matrix3d R = sensor_in_world.linear();
+  const Eigen::Vector3d origin = sensor_in_world.translation();
+  // Pinhole image plane at x = 1: pixel centres spread over the field of view.
+  const double half_w = std::tan(0.5 * model.horizontal_fov), half_h = std::tan(0.5 * model.vertical_fov);
+  RayHit hit;
+  for (int row = 0; row < model.rows; ++row) {
+    const double v = half_h * (1.0 - 2.0 * (row + 0.5) / model.rows);  // top row looks up
+    for (int col = 0; col < model.columns; ++col) {
+      const double u = half_w * (1.0 - 2.0 * (col + 0.5) / model.columns);  // left column: +y
+      const Eigen::Vector3d ds = Eigen::Vector3d(1.0, u, v).normalized();
+      const Eigen::Vector3d dw = R * ds;
+      if (!castRay(world, origin, dw, model.max_range, &hit)) continue;
+      double r;
+      if (!noisyRange(hit.range, model.noise_sigma, model.min_range, model.max_range, seed,
+                      static_cast<uint64_t>(row) * model.columns + col, &r)) {
+        continue;
+      }
+      putFloat(dst + 0, static_cast<float>(ds.x() * r));
+      putFloat(dst + 4, static_cast<float>(ds.y() * r));
+      putFloat(dst + 8, static_cast<float>(ds.z() * r));
+      dst += 12;
+      out->truth[count++] = static_cast<uint8_t>(hit.surface);
+    }
+  }
+  out->cloud.data.resize(count * 12);
+  out->truth.resize(count);
+  sizeLayout(&out->cloud.layout, static_cast<uint32_t>(count), xyzLayout);
+}
+
+}  // namespace sim
+}  // namespace ladar_perception
