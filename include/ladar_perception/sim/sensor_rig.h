@@ -71,6 +71,9 @@ class VehicleMotion {
   Eigen::Isometry3d poseAt(double t) const;
   double duration() const;
 
+  // Start over at the end (t wraps modulo duration()) instead of stopping there.
+  bool loop = false;
+
  private:
   const World* world_ = nullptr;
   Trajectory trajectory_;

@@ -314,6 +314,8 @@ VehicleMotion VehicleMotion::holding(const std::vector<Eigen::Isometry3d>& poses
 }
 
 Eigen::Isometry3d VehicleMotion::poseAt(double t) const {
+  const double d = duration();
+  if (loop && d > 0.0 && t >= d) t = std::fmod(t, d);
   if (!poses_.empty()) {
     const double k = std::floor(std::max(t, 0.0) / hold_);
     const std::size_t idx = static_cast<std::size_t>(std::min(k, static_cast<double>(poses_.size() - 1)));
