@@ -117,9 +117,11 @@ class HoughLineFitter {
   void refine(const float* r, const float* height, int n, GroundLineFit* fit) const;
 
   HoughGroundParams params_;
-  int n_ground_ = 0, n_slope_ = 0, pad_ = 0, row_ = 0;
-  std::vector<uint32_t> votes_;   // n_slope_ rows of row_ (padded) single-cell votes
-  std::vector<uint32_t> counts_;  // n_slope_ rows of n_ground_ window counts
+  int n_ground_ = 0, n_slope_ = 0, pad_ = 0, row_ = 0, stride_ = 0;
+  std::vector<int16_t> votes_;    // n_slope_ rows of row_ (padded) single-cell votes
+  std::vector<int16_t> counts_;   // n_slope_ rows of n_ground_ window counts
+  std::vector<int16_t> row_scratch_, row_max_;
+  std::vector<float> fr_, fh_;    // the returns that vote (compacted)
 };
 
 // Eqs 3.13-3.15 for one return against a fitted line. SlopeError (3.14) is Slope_i - Slope*

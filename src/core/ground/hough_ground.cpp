@@ -51,9 +51,13 @@ void HoughLineFitter::setParams(const HoughGroundParams& in) {
   // Window half-width in cells so that the window spans about +-ErrorTolerance.
   pad_ = std::max(0, static_cast<int>(std::lround(p.error_tolerance / p.ground_resolution - 0.5f)));
   pad_ = std::min(pad_, kMaxCells);
-  row_ = n_ground_ + 2 * pad_;
+  // Rows of counts are padded to a multiple of 8 cells (whole SSE2 vectors, no scalar tails).
+  stride_ = (n_ground_ + 7) & ~7;
+  row_ = stride_ + 2 * pad_;
   votes_.assign(static_cast<std::size_t>(n_slope_) * row_, 0);
-  counts_.assign(static_cast<std::size_t>(n_slope_) * n_ground_, 0);
+  row_scratch_.assign(stride_, 0);
+  row_max_.assign(n_slope_, 0);
+  counts_.assign(static_cast<std::size_t>(n_slope_) * stride_, 0);
   params_ = p;
 }
 
@@ -61,15 +65,15 @@ int HoughLineFitter::count(int slope_cell, int ground_cell) const {
   if (slope_cell < 0 || slope_cell >= n_slope_ || ground_cell < 0 || ground_cell >= n_ground_) {
     return 0;
   }
-  return static_cast<int>(counts_[static_cast<std::size_t>(slope_cell) * n_ground_ + ground_cell]);
+  return static_cast<int>(counts_[static_cast<std::size_t>(slope_cell) * stride_ + ground_cell]);
 }
 
 int HoughLineFitter::vote(const float* r, const float* height, int n, const GroundLineFit* exclude) {
   const HoughGroundParams& p = params_;
-  std::fill(votes_.begin(), votes_.end(), 0u);
+  std::fill(votes_.begin(), votes_.end(), int16_t(0));
   const float inv_gres = 1.f / p.ground_resolution;
   const float last_row = static_cast<float>(n_slope_ - 1);
-  const float row_f = static_cast<float>(row_);
+  const float row_f = static_cast<float>(n_ground_ + 2 * pad_);  // cells past it stay 0
   // Eq 3.12, voting: a return votes in each Slope row for the Ground cell of the line through
   // it, Ground = Height - r * Slope. Along the rows that cell moves by r * dSlope / dGround, so
   // only the rows where it stays inside the (padded) row are visited.
@@ -83,6 +87,7 @@ int HoughLineFitter::vote(const float* r, const float* height, int n, const Grou
     // Padded cell index (+0.5: round to the nearest cell centre) in row j: c0 - j * dc.
     const float c0 = (hi - ri * p.slope_min - p.ground_min) * inv_gres + static_cast<float>(pad_) + 0.5f;
     const float dc = ri * p.slope_resolution * inv_gres;
+    if (!(std::fabs(c0) < 16384.f) || !(std::fabs(dc) < 16384.f)) continue;  // far off the grid
     float j_lo, j_hi;
     if (dc > 0.f) {
       j_lo = (c0 - row_f) / dc;
@@ -94,50 +99,87 @@ int HoughLineFitter::vote(const float* r, const float* height, int n, const Grou
     const int j0 = static_cast<int>(std::max(0.f, std::floor(j_lo)));
     const int j1 = static_cast<int>(std::min(last_row, std::ceil(j_hi)));
     if (j0 > j1) continue;
+    // 16.16 fixed point along the rows: one subtraction and shift per vote. The cell moves
+    // monotonically with j, so trimming the row range's ends leaves only in-range cells.
+    const int64_t fixed0 = static_cast<int64_t>(static_cast<double>(c0) * 65536.0);
+    const int64_t dfixed = static_cast<int64_t>(static_cast<double>(dc) * 65536.0);
+    const int64_t cells = n_ground_ + 2 * pad_;
+    auto cellAt = [&](int j) { return (fixed0 - static_cast<int64_t>(j) * dfixed) >> 16; };
+    int a = j0, b = j1;
+    while (a <= b && (cellAt(a) < 0 || cellAt(a) >= cells)) ++a;
+    while (b >= a && (cellAt(b) < 0 || cellAt(b) >= cells)) --b;
+    if (a > b) continue;
     ++votes;
-    uint32_t* acc = votes_.data();
-    for (int j = j0; j <= j1; ++j) {
-      const float f = c0 - static_cast<float>(j) * dc;
-      if (f >= 0.f && f < row_f) ++acc[j * row_ + static_cast<int>(f)];
-    }
+    const int row = row_;  // a local: the stores through acc could alias the member
+    int16_t* acc = votes_.data() + static_cast<std::size_t>(a) * row;
+    int64_t f = fixed0 - static_cast<int64_t>(a) * dfixed;
+    for (int j = a; j <= b; ++j, f -= dfixed, acc += row) ++acc[f >> 16];
   }
   return votes;
 }
 
 uint32_t HoughLineFitter::argmax(bool store, int* best_j, int* best_c) {
   // count(|ErrorValue| < ErrorTolerance) of each cell: a window of 2 pad + 1 cells over the
-  // single-cell votes. Ties (the window makes plateaus) go to the cell with more returns of its
-  // own, then to the lowest Ground (obstacles stand on the ground and shadow it, so a tie is
-  // more likely resolved correctly downward, as WeightBias in eq 3.6).
+  // single-cell votes, and its maximum. Signed 16-bit counts, locals and restrict, so the
+  // compiler vectorises the loops with plain SSE2.
   const int window = 2 * pad_ + 1;
-  uint32_t best = 0, best_centre = 0;
+  const int ng = n_ground_, ns = n_slope_, row = row_, stride = stride_;
+  int16_t best = 0;
+  for (int j = 0; j < ns; ++j) {
+    const int16_t* __restrict v = votes_.data() + static_cast<std::size_t>(j) * row;
+    int16_t* __restrict out =
+        store ? counts_.data() + static_cast<std::size_t>(j) * stride : row_scratch_.data();
+    for (int c = 0; c < stride; ++c) out[c] = v[c];
+    for (int k = 1; k < window; ++k) {
+      const int16_t* __restrict vk = v + k;
+      for (int c = 0; c < stride; ++c) out[c] = static_cast<int16_t>(out[c] + vk[c]);
+    }
+    for (int c = ng; c < stride; ++c) out[c] = 0;  // padding cells: no hypothesis
+    int16_t m = 0;
+    for (int c = 0; c < stride; ++c) m = std::max(m, out[c]);
+    row_max_[j] = m;
+    best = std::max(best, m);
+  }
   *best_j = -1;
   *best_c = -1;
-  for (int j = 0; j < n_slope_; ++j) {
-    const uint32_t* v = votes_.data() + static_cast<std::size_t>(j) * row_;
-    uint32_t* out = counts_.data() + static_cast<std::size_t>(j) * n_ground_;
-    uint32_t sum = 0;
-    for (int k = 0; k < window - 1; ++k) sum += v[k];
-    for (int c = 0; c < n_ground_; ++c) {
-      sum += v[c + window - 1];
-      if (store) out[c] = sum;
-      if (sum > best || (sum == best && sum > 0 &&
-                         (v[c + pad_] > best_centre || (v[c + pad_] == best_centre && c < *best_c)))) {
-        best = sum;
-        best_centre = v[c + pad_];
+  if (best == 0 || !store) return static_cast<uint32_t>(best);
+  // Ties (the window makes plateaus) go to the cell with more returns of its own, then to the
+  // lowest Ground (obstacles stand on the ground and shadow it, so a tie is more likely
+  // resolved correctly downward, as WeightBias in eq 3.6).
+  int16_t best_centre = -1;
+  for (int j = 0; j < ns; ++j) {
+    if (row_max_[j] != best) continue;
+    const int16_t* v = votes_.data() + static_cast<std::size_t>(j) * row + pad_;
+    const int16_t* cnt = counts_.data() + static_cast<std::size_t>(j) * stride;
+    for (int c = 0; c < ng; ++c) {
+      if (cnt[c] != best) continue;
+      if (v[c] > best_centre || (v[c] == best_centre && c < *best_c)) {
+        best_centre = v[c];
         *best_j = j;
         *best_c = c;
       }
-      sum -= v[c];
     }
   }
-  return best;
+  return static_cast<uint32_t>(best);
 }
 
 GroundLineFit HoughLineFitter::fit(const float* r, const float* height, int n) {
   const HoughGroundParams& p = params_;
   GroundLineFit fit;
-  fit.votes = vote(r, height, n, nullptr);
+  // The returns that can vote: finite, |r| in [min_fit_distance, max_fit_distance]; at most
+  // 32767, so that no 16-bit count overflows (far more than any vertical scan holds).
+  fr_.clear();
+  fh_.clear();
+  for (int i = 0; i < n && fr_.size() < 32767u; ++i) {
+    const float ri = r[i], hi = height[i];
+    const float ar = std::fabs(ri);
+    if (ar >= p.min_fit_distance && ar <= p.max_fit_distance && std::isfinite(hi)) {  // NaN fails
+      fr_.push_back(ri);
+      fh_.push_back(hi);
+    }
+  }
+  const int m = static_cast<int>(fr_.size());
+  fit.votes = vote(fr_.data(), fh_.data(), m, nullptr);
   int best_j = -1, best_c = -1;
   const uint32_t best = argmax(true, &best_j, &best_c);
   if (best_j < 0 || static_cast<int>(best) < p.min_inliers) return fit;
@@ -150,13 +192,13 @@ GroundLineFit HoughLineFitter::fit(const float* r, const float* height, int n) {
   // Runner-up (confidence, beyond the thesis): the most returns any line explains among the
   // returns the winning cell does not explain, i.e. the best competing ground hypothesis.
   // A second vote without the winner's inliers; the stored accumulator stays the first one.
-  vote(r, height, n, &fit);
+  vote(fr_.data(), fh_.data(), m, &fit);
   int j2, c2;
   const uint32_t runner = argmax(false, &j2, &c2);
   fit.runner_up = static_cast<int>(runner);
   fit.margin = static_cast<float>(best - std::min(best, runner)) / static_cast<float>(best);
 
-  refine(r, height, n, &fit);
+  refine(fr_.data(), fh_.data(), m, &fit);
   return fit;
 }
 
