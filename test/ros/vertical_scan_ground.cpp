@@ -248,6 +248,7 @@ TEST_F(VerticalScanGroundTest, MissingTfIsReportedNotFatal) {
   ros::NodeHandle nh("tf_missing");
   ros::NodeHandle pnh("tf_missing/vertical_scan_ground");
   pnh.setParam("tf_tolerance", 0.05);
+  pnh.setParam("queue_size", 3);
   lp::VerticalScanGroundRos adapter(nh, pnh);
   Latest classified;
   ros::Subscriber s = nh.subscribe("classified", 5, &Latest::callback, &classified);
@@ -265,7 +266,9 @@ TEST_F(VerticalScanGroundTest, MissingTfIsReportedNotFatal) {
   ros::Publisher pub = nh.advertise<sensor_msgs::PointCloud2>("points", 5);
   ASSERT_TRUE(waitFor([&] { return pub.getNumSubscribers() > 0; }));
   const Scene scene = makeScene(lp::velodyneXYZIRTLayout(0));
-  for (int i = 0; i < 3; ++i) {
+  // A stream of scans whose frame tf never knows: each one that falls out of the tf filter's
+  // queue (queue_size 3) is counted and reported.
+  for (int i = 0; i < 6; ++i) {
     pub.publish(sensor_msgs::PointCloud2ConstPtr(toMsg(scene.cloud, "no_such_frame")));
     ros::WallDuration(0.05).sleep();
   }
