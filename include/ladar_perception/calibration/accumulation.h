@@ -48,6 +48,10 @@ PointVector voxelDownsample(const PointVector& points, double voxel);
 // The same per scan, in the sensor frame, so the result does not depend on any hypothesis.
 ScanSet voxelDownsampleScans(const ScanSet& scans, double voxel);
 
+// Voxel-downsamples each scan, then keeps every k-th point (evenly over all scans) so that at
+// most max_points remain (0 = no limit).
+ScanSet thinScans(const ScanSet& scans, double voxel, std::size_t max_points);
+
 // Readable points of a cloud (finite, range within [min_range, max_range]) in its own frame.
 void pointsFromView(const PointCloudView& view, double min_range, double max_range,
                     PointVector* out);

@@ -43,12 +43,13 @@ struct CalibrationParams {
   double bin_size = 3.0;         // feature bin [m] (2-4 m worked best)
   double trim_fraction = 0.5;    // eq 4.1 Fraction
   double feature_voxel = 0.25;   // clouds thinned to this before feature extraction [m]
+  int feature_max_points = 20000; // the target evenly thinned to this for the searches' score
   bool use_minima = true;        // score local minima as well as maxima
   SearchParams search;           // initial/spread are overwritten from the fields above
   RefinementParams refinement;
   ObservabilityParams observability;
   // The coarse stage of the default method stops once its spread is below this.
-  Pose6 coarse_min_spread = (Pose6() << 0.05, 0.05, 0.05, 0.01, 0.01, 0.01).finished();
+  Pose6 coarse_min_spread = (Pose6() << 0.08, 0.08, 0.08, 0.015, 0.015, 0.015).finished();
   int coarse_max_iterations = 25;
 };
 
@@ -63,7 +64,8 @@ struct CalibrationResult {
   Pose6 stddev = Pose6::Zero();     // per DOF; infinity when unobservable
   double final_cost = 0;            // the method's own cost at the solution
   std::vector<std::string> unobservable;
-  double elapsed = 0;               // seconds
+  double elapsed = 0;               // seconds, wall clock
+  double cpu_time = 0;              // seconds of this thread's CPU (the one-core figure)
   std::string method;
   long evaluations = 0;
   std::vector<Pose6> trace;         // the estimate after each iteration of every stage

@@ -15,8 +15,11 @@ namespace ladar_perception {
 namespace calibration {
 
 struct ObservabilityParams {
-  // A scaled eigenvalue below this fraction of the largest is a weak direction.
-  double relative_threshold = 0.01;
+  // A direction whose curvature is below this fraction of the largest is weak.
+  double relative_threshold = 1e-3;
+  // A direction whose predicted standard deviation sqrt(sigma^2 / (N * curvature)) exceeds this
+  // is weak too [m; rotations in metres at the lever arm].
+  double max_stddev = 0.05;
   // A DOF is unobservable when at least this fraction of its unit vector lies in the weak subspace.
   double min_projection = 0.5;
   // Probe length for the measured curvature [m; radians are scaled by the lever arm].

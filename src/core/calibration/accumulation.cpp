@@ -109,6 +109,26 @@ ScanSet voxelDownsampleScans(const ScanSet& scans, double voxel) {
   return out;
 }
 
+ScanSet thinScans(const ScanSet& scans, double voxel, std::size_t max_points) {
+  ScanSet thin = voxelDownsampleScans(scans, voxel);
+  if (max_points == 0 || thin.numPoints() <= max_points) return thin;
+  const double stride = static_cast<double>(thin.numPoints()) / static_cast<double>(max_points);
+  ScanSet out;
+  PointVector scan;
+  double next = 0;
+  for (std::size_t k = 0; k < thin.numScans(); ++k) {
+    scan.clear();
+    for (uint32_t i = thin.scan_begin[k]; i < thin.scan_begin[k + 1]; ++i) {
+      if (i >= next) {
+        scan.push_back(thin.points[i]);
+        next += stride;
+      }
+    }
+    out.addScan(thin.stamps[k], thin.vehicle_poses[k], scan);
+  }
+  return out;
+}
+
 void pointsFromView(const PointCloudView& view, double min_range, double max_range,
                     PointVector* out) {
   out->clear();

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <sstream>
 
+#include <time.h>
+
 namespace ladar_perception {
 namespace calibration {
 
@@ -51,7 +53,8 @@ CalibrationParams thesisParticleFilterParams() {
 
 HypothesisCost::HypothesisCost(const CalibrationInput& input, const CalibrationParams& params)
     : params_(params), extractor_(params.bin_size) {
-  target_ = voxelDownsampleScans(input.target, params.feature_voxel);
+  target_ = thinScans(input.target, params.feature_voxel,
+                      static_cast<std::size_t>(std::max(0, params.feature_max_points)));
   PointVector reference;
   accumulate(input.reference, input.reference_extrinsic, &reference);
   reference = voxelDownsample(reference, params.feature_voxel);
@@ -97,6 +100,12 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
+double threadCpuSeconds() {
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return ts.tv_sec + 1e-9 * ts.tv_nsec;
+}
+
 std::string joinNames(const std::vector<std::string>& names) {
   std::string s;
   for (const std::string& n : names) s += (s.empty() ? "" : ", ") + n;
@@ -108,6 +117,7 @@ std::string joinNames(const std::vector<std::string>& names) {
 CalibrationResult calibrate(const CalibrationInput& input, const CalibrationParams& params_in,
                             const ProgressFn& progress) {
   const auto t0 = Clock::now();
+  const double cpu0 = threadCpuSeconds();
   CalibrationResult out;
   CalibrationParams params = params_in;
   if (params.method.empty() || params.method == "default") params.method = defaultMethod();
@@ -115,6 +125,7 @@ CalibrationResult calibrate(const CalibrationInput& input, const CalibrationPara
   out.extrinsic = params.initial;
   const auto finish = [&](CalibrationResult& r) -> CalibrationResult& {
     r.elapsed = std::chrono::duration<double>(Clock::now() - t0).count();
+    r.cpu_time = threadCpuSeconds() - cpu0;
     return r;
   };
   if (!isMethod(params.method)) {

@@ -42,11 +42,21 @@ Observability analyseObservability(const Matrix6& hessian, double residual_varia
   }
   const double top = std::max(out.curvature.maxCoeff(), 1e-300);
   out.relative_min = out.curvature.minCoeff() / top;
+  // Weak: flat relative to the strongest direction, or too flat to fix the solution to
+  // max_stddev given the residual noise and the number of correspondences.
+  std::array<bool, 6> weak{};
+  for (int k = 0; k < 6; ++k) {
+    const double predicted =
+        out.curvature[k] > 0
+            ? std::sqrt(residual_variance / (static_cast<double>(correspondences) * out.curvature[k]))
+            : inf;
+    weak[k] = out.curvature[k] < params.relative_threshold * top || predicted > params.max_stddev;
+  }
   Matrix6 weak_projector = Matrix6::Zero();
   Matrix6 pinv = Matrix6::Zero();  // pseudo-inverse over the strong directions
   for (int k = 0; k < 6; ++k) {
     const Pose6 v = es.eigenvectors().col(k);
-    if (out.curvature[k] < params.relative_threshold * top) {
+    if (weak[k]) {
       weak_projector += v * v.transpose();
     } else {
       pinv += v * v.transpose() / std::max(out.eigenvalues[k], 1e-300);
@@ -59,7 +69,7 @@ Observability analyseObservability(const Matrix6& hessian, double residual_varia
   std::array<bool, 6> weak_dof{};
   for (int i = 0; i < 6; ++i) weak_dof[i] = weak_projector(i, i) >= params.min_projection;
   for (int k = 0; k < 6; ++k) {
-    if (out.curvature[k] >= params.relative_threshold * top) continue;
+    if (!weak[k]) continue;
     int dominant = 0;
     es.eigenvectors().col(k).cwiseAbs().maxCoeff(&dominant);
     weak_dof[dominant] = true;

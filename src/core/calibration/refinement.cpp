@@ -102,26 +102,8 @@ Pose6 applyStep(const Pose6& extrinsic, const Pose6& step) {
 }
 
 ScanSet refinementTarget(const ScanSet& target, const RefinementParams& params) {
-  ScanSet thin = voxelDownsampleScans(target, params.target_voxel);
-  if (params.max_target_points <= 0 ||
-      thin.numPoints() <= static_cast<std::size_t>(params.max_target_points)) {
-    return thin;
-  }
-  const double stride = static_cast<double>(thin.numPoints()) / params.max_target_points;
-  ScanSet out;
-  PointVector scan;
-  double next = 0;
-  for (std::size_t k = 0; k < thin.numScans(); ++k) {
-    scan.clear();
-    for (uint32_t i = thin.scan_begin[k]; i < thin.scan_begin[k + 1]; ++i) {
-      if (i >= next) {
-        scan.push_back(thin.points[i]);
-        next += stride;
-      }
-    }
-    out.addScan(thin.stamps[k], thin.vehicle_poses[k], scan);
-  }
-  return out;
+  return thinScans(target, params.target_voxel,
+                   static_cast<std::size_t>(std::max(0, params.max_target_points)));
 }
 
 RefinementResult refine(const SurfaceModel& model, const ScanSet& target, const Pose6& initial,

@@ -1,0 +1,69 @@
+// The thesis's calibration experiment (5.2.1) on the simulator: vehicle poses drawn within 5 m
+// and 0.5 rad of the origin, the reference sensor 2 m above the ground at the origin, the target
+// 1 m forward, the initial guess off by up to +-1 m and +-0.2 rad per axis. Shared by
+// calibration_benchmark, the tests and the rostest's data publisher.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "ladar_perception/calibration/calibrator.h"
+#include "ladar_perception/sim/sensor_models.h"
+#include "ladar_perception/sim/world.h"
+
+namespace ladar_perception {
+namespace calibration {
+
+enum class SensorKind { kVelodyne, kSick, kStereo };
+const char* sensorKindName(SensorKind kind);
+
+struct SensorSetup {
+  SensorKind kind = SensorKind::kVelodyne;
+  Pose6 extrinsic = Pose6::Zero();  // base_link -> sensor, the truth
+};
+
+// "target-reference" names: velodyne-velodyne, sick-velodyne (a SICK calibrated against a
+// Velodyne), sick-sick, stereo-velodyne, velodyne-stereo.
+struct PairSetup {
+  std::string name;
+  SensorSetup reference;
+  SensorSetup target;
+};
+bool pairFromName(const std::string& name, PairSetup* out, std::string* error);
+std::vector<std::string> pairNames();
+
+struct ExperimentOptions {
+  int poses = 10;
+  double centre_x = 0.0;    // the poses are drawn around this point of the world [m]
+  double centre_y = 0.0;
+  double max_offset = 5.0;  // [m]
+  double max_yaw = 0.5;     // [rad]
+  // When >= 0: poses along a corridor instead of a disk, x within +-max_offset of the centre,
+  // y within +-max_lateral, yaw within +-max_yaw (driving along an alley).
+  double max_lateral = -1.0;
+  // A 2D ladar at 75 Hz gives several scans while the vehicle stands at a pose (noise differs).
+  int sick_scans_per_pose = 5;
+  sim::NoiseProfile noise = sim::NoiseProfile::kTable41;
+  Pose6 guess_offset = (Pose6() << 1.0, 1.0, 1.0, 0.2, 0.2, 0.2).finished();  // uniform +-
+};
+
+struct ExperimentTrial {
+  CalibrationInput input;
+  Pose6 truth = Pose6::Zero();
+  Pose6 initial_guess = Pose6::Zero();
+  std::vector<Eigen::Isometry3d, Eigen::aligned_allocator<Eigen::Isometry3d>> vehicle_poses;
+};
+
+// Simulates one trial (deterministic in `seed`).
+bool makeTrial(const sim::World& world, const PairSetup& pair, const ExperimentOptions& options,
+               uint64_t seed, ExperimentTrial* out, std::string* error);
+
+// One scan of a sensor at a vehicle pose, points in the sensor frame (the simulator's output
+// read back through PointCloudView, as a driver's cloud would be).
+bool simulateSensor(const sim::World& world, const SensorSetup& sensor,
+                    const Eigen::Isometry3d& vehicle_pose, sim::NoiseProfile noise, uint64_t seed,
+                    PointVector* points, std::string* error);
+
+}  // namespace calibration
+}  // namespace ladar_perception

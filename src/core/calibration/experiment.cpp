@@ -1,0 +1,131 @@
+#include "ladar_perception/calibration/experiment.h"
+
+#include "ladar_perception/sim/random.h"
+#include "ladar_perception/sim/scan_simulator.h"
+#include "ladar_perception/sim/trajectory.h"
+
+namespace ladar_perception {
+namespace calibration {
+
+const char* sensorKindName(SensorKind kind) {
+  switch (kind) {
+    case SensorKind::kVelodyne: return "velodyne";
+    case SensorKind::kSick: return "sick";
+    case SensorKind::kStereo: return "stereo";
+  }
+  return "?";
+}
+
+std::vector<std::string> pairNames() {
+  return {"velodyne-velodyne", "sick-velodyne", "sick-sick", "stereo-velodyne", "velodyne-stereo"};
+}
+
+bool pairFromName(const std::string& name, PairSetup* out, std::string* error) {
+  // Mounts: the reference 2 m above the ground at the origin, the target 1 m forward (5.2.1).
+  // 2D ladars are tilted down to meet the ground about 10 m away, the stereo camera a little.
+  const SensorSetup velodyne_ref{SensorKind::kVelodyne, makePose(0, 0, 2.0, 0, 0, 0)};
+  const SensorSetup velodyne_tgt{SensorKind::kVelodyne, makePose(1.0, 0, 2.0, 0, 0, 0)};
+  const SensorSetup sick_ref{SensorKind::kSick, makePose(0, 0, 2.0, 0, 0.2, 0)};
+  const SensorSetup sick_tgt{SensorKind::kSick, makePose(1.0, 0, 2.0, 0, 0.2, 0)};
+  const SensorSetup sick_tgt_side{SensorKind::kSick, makePose(1.0, 0, 2.0, 0, 0.25, 0.5)};
+  const SensorSetup stereo_ref{SensorKind::kStereo, makePose(0, 0, 2.0, 0, 0.15, 0)};
+  const SensorSetup stereo_tgt{SensorKind::kStereo, makePose(1.0, 0, 2.0, 0, 0.15, 0)};
+  out->name = name;
+  if (name == "velodyne-velodyne") {
+    out->reference = velodyne_ref;
+    out->target = velodyne_tgt;
+  } else if (name == "sick-velodyne") {
+    out->reference = velodyne_ref;
+    out->target = sick_tgt;
+  } else if (name == "sick-sick") {
+    out->reference = sick_ref;
+    out->target = sick_tgt_side;
+  } else if (name == "stereo-velodyne") {
+    out->reference = velodyne_ref;
+    out->target = stereo_tgt;
+  } else if (name == "velodyne-stereo") {
+    out->reference = stereo_ref;
+    out->target = velodyne_tgt;
+  } else {
+    if (error) {
+      *error = "unknown sensor pair '" + name + "' (pairs:";
+      for (const std::string& n : pairNames()) *error += " " + n;
+      *error += ")";
+    }
+    return false;
+  }
+  return true;
+}
+
+bool simulateSensor(const sim::World& world, const SensorSetup& sensor,
+                    const Eigen::Isometry3d& vehicle_pose, sim::NoiseProfile noise, uint64_t seed,
+                    PointVector* points, std::string* error) {
+  const Eigen::Isometry3d pose = vehicle_pose * toIsometry(sensor.extrinsic);
+  sim::SimulatedScan scan;
+  const PackedCloud* cloud = &scan.cloud;
+  sim::SimulatedLaserScan laser;
+  switch (sensor.kind) {
+    case SensorKind::kVelodyne:
+      sim::simulateVelodyneRevolution(world, pose, sim::VelodyneModel::hdl64e(noise), seed, &scan);
+      break;
+    case SensorKind::kSick:
+      sim::simulateSickScan(world, pose, sim::SickModel::lms291(noise), seed, &laser);
+      cloud = &laser.points.cloud;
+      break;
+    case SensorKind::kStereo:
+      sim::simulateStereoFrame(world, pose, sim::StereoModel::bumblebee(noise), seed, &scan);
+      break;
+  }
+  PointCloudView view;
+  if (!cloud->view(&view, error)) return false;
+  pointsFromView(view, 0.0, 1e9, points);
+  return true;
+}
+
+bool makeTrial(const sim::World& world, const PairSetup& pair, const ExperimentOptions& options,
+               uint64_t seed, ExperimentTrial* out, std::string* error) {
+  *out = ExperimentTrial();
+  sim::RandomPoseOptions pose_options;
+  pose_options.max_offset = options.max_offset;
+  pose_options.centre_x = options.centre_x;
+  pose_options.centre_y = options.centre_y;
+  pose_options.max_yaw = options.max_yaw;
+  std::vector<Eigen::Isometry3d> poses;
+  if (options.max_lateral >= 0) {
+    sim::Rng pose_rng(sim::mix64(seed ^ 0x905e5ULL));
+    for (int k = 0; k < options.poses; ++k) {
+      const double x = options.centre_x + pose_rng.uniform(-1.0, 1.0) * options.max_offset;
+      const double y = options.centre_y + pose_rng.uniform(-1.0, 1.0) * options.max_lateral;
+      const double yaw = pose_rng.uniform(-1.0, 1.0) * options.max_yaw;
+      poses.push_back(world.vehiclePose(x, y, yaw));
+    }
+  } else {
+    poses = sim::randomVehiclePoses(world, options.poses, sim::mix64(seed ^ 0x905e5ULL),
+                                    pose_options);
+  }
+  out->vehicle_poses.assign(poses.begin(), poses.end());
+  out->truth = pair.target.extrinsic;
+  sim::Rng rng(sim::mix64(seed ^ 0x6e55ULL));
+  out->initial_guess = out->truth;
+  for (int i = 0; i < 6; ++i) out->initial_guess[i] += rng.uniform(-1.0, 1.0) * options.guess_offset[i];
+  out->input.reference_extrinsic = toIsometry(pair.reference.extrinsic);
+  PointVector points;
+  uint64_t stream = sim::mix64(seed);
+  for (std::size_t k = 0; k < poses.size(); ++k) {
+    const double stamp = 0.1 * static_cast<double>(k);
+    for (int side = 0; side < 2; ++side) {
+      const SensorSetup& s = side == 0 ? pair.reference : pair.target;
+      ScanSet& set = side == 0 ? out->input.reference : out->input.target;
+      const int repeats = s.kind == SensorKind::kSick ? std::max(1, options.sick_scans_per_pose) : 1;
+      for (int r = 0; r < repeats; ++r) {
+        stream = sim::mix64(stream + 1);
+        if (!simulateSensor(world, s, poses[k], options.noise, stream, &points, error)) return false;
+        set.addScan(stamp + r / 75.0, poses[k], points);
+      }
+    }
+  }
+  return true;
+}
+
+}  // namespace calibration
+}  // namespace ladar_perception

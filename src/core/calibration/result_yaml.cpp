@@ -1,0 +1,115 @@
+#include "ladar_perception/calibration/result_yaml.h"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <sstream>
+
+namespace ladar_perception {
+namespace calibration {
+
+namespace {
+// Always with a decimal point: XmlRpc must read a double, never an int.
+std::string num(double v) {
+  char buf[64];
+  std::snprintf(buf, sizeof(buf), "%.9f", v);
+  return buf;
+}
+std::string fig(double v) {
+  if (!std::isfinite(v)) return "unobservable";
+  char buf[64];
+  std::snprintf(buf, sizeof(buf), "%.6g", v);
+  return buf;
+}
+std::string sanitize(const std::string& s) {
+  std::string out;
+  for (char c : s) out += (c == '\n' || c == '\r') ? ' ' : c;
+  return out;
+}
+}  // namespace
+
+std::string staticTransformYaml(const std::string& parent_frame, const std::string& child_frame,
+                                const CalibrationResult& r) {
+  const Eigen::Isometry3d t = toIsometry(r.extrinsic);
+  const Eigen::Quaterniond q(t.linear());
+  std::ostringstream y;
+  y << "# ladar_perception calibration of " << sanitize(child_frame) << " against the reference, "
+    << "method " << sanitize(r.method) << "\n";
+  y << "# success: " << (r.success ? "true" : "false") << "; " << sanitize(r.message) << "\n";
+  y << "# x y z roll pitch yaw: " << num(r.extrinsic[0]) << " " << num(r.extrinsic[1]) << " "
+    << num(r.extrinsic[2]) << " " << num(r.extrinsic[3]) << " " << num(r.extrinsic[4]) << " "
+    << num(r.extrinsic[5]) << "\n";
+  y << "# stddev x y z roll pitch yaw:";
+  for (int i = 0; i < 6; ++i) y << " " << fig(r.stddev[i]);
+  y << "\n# final cost: " << fig(r.final_cost) << "\n";
+  y << "# unobservable:";
+  for (const std::string& u : r.unobservable) y << " " << u;
+  y << (r.unobservable.empty() ? " none" : "") << "\n";
+  y << "header:\n  frame_id: \"" << sanitize(parent_frame) << "\"\n";
+  y << "child_frame_id: \"" << sanitize(child_frame) << "\"\n";
+  y << "transform:\n";
+  y << "  translation: {x: " << num(t.translation().x()) << ", y: " << num(t.translation().y())
+    << ", z: " << num(t.translation().z()) << "}\n";
+  y << "  rotation: {x: " << num(q.x()) << ", y: " << num(q.y()) << ", z: " << num(q.z())
+    << ", w: " << num(q.w()) << "}\n";
+  return y.str();
+}
+
+bool writeFileAtomically(const std::string& path, const std::string& text, std::string* error) {
+  const std::string tmp = path + ".tmp." + std::to_string(::getpid());
+  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  if (fd < 0) {
+    if (error) *error = "cannot create " + tmp + ": " + std::strerror(errno);
+    return false;
+  }
+  std::size_t done = 0;
+  while (done < text.size()) {
+    const ssize_t n = ::write(fd, text.data() + done, text.size() - done);
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      if (error) *error = "cannot write " + tmp + ": " + std::strerror(errno);
+      ::close(fd);
+      ::unlink(tmp.c_str());
+      return false;
+    }
+    done += static_cast<std::size_t>(n);
+  }
+  if (::fsync(fd) != 0 || ::close(fd) != 0) {
+    if (error) *error = "cannot flush " + tmp + ": " + std::strerror(errno);
+    ::unlink(tmp.c_str());
+    return false;
+  }
+  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
+    if (error) *error = "cannot rename to " + path + ": " + std::strerror(errno);
+    ::unlink(tmp.c_str());
+    return false;
+  }
+  return true;
+}
+
+bool writeStaticTransformYaml(const std::string& path, const std::string& parent_frame,
+                              const std::string& child_frame, const CalibrationResult& result,
+                              std::string* error) {
+  return writeFileAtomically(path, staticTransformYaml(parent_frame, child_frame, result), error);
+}
+
+std::string staticTransformLaunchLine(const std::string& yaml_path,
+                                      const std::string& parent_frame,
+                                      const std::string& child_frame) {
+  std::string ns = child_frame + "_calibration";
+  for (char& c : ns) {
+    if (!std::isalnum(static_cast<unsigned char>(c)) && c != '_') c = '_';
+  }
+  std::ostringstream l;
+  l << "<rosparam command=\"load\" file=\"" << yaml_path << "\" ns=\"" << ns << "\"/>"
+    << "<node pkg=\"tf2_ros\" type=\"static_transform_publisher\" name=\"" << ns
+    << "_publisher\" args=\"/" << ns << "\"/>";
+  return l.str();
+}
+
+}  // namespace calibration
+}  // namespace ladar_perception
