@@ -7,6 +7,7 @@
 #include <fstream>
 #include <map>
 
+#include "ladar_perception/io/image.h"
 #include "ladar_perception/sim/trajectory.h"
 #include "ladar_perception/sim/world.h"
 
@@ -258,6 +259,55 @@ TEST(SimWorld, ImageWorldBlackIsHigh) {
   EXPECT_FALSE(World::fromImage(path + ".missing", "", options, &w, &error));
   EXPECT_FALSE(error.empty());
   std::remove(path.c_str());
+}
+
+
+TEST(SimWorld, ExampleTrajectoryLoadsAndStaysOnTheRoad) {
+  Trajectory t;
+  std::string error;
+  ASSERT_TRUE(loadTrajectoryYaml(std::string(LADAR_SOURCE_DIR) + "/config/sim_urban_detour.yaml", &t, &error))
+      << error;
+  EXPECT_DOUBLE_EQ(t.speed(), 4.0);
+  const World& w = standard("urban");
+  for (double time = 0.0; time <= t.duration(); time += 0.25) {
+    double x, y, yaw;
+    t.pose2d(time, &x, &y, &yaw);
+    const Eigen::Isometry3d pose = w.vehiclePose(x, y, yaw);
+    for (double a = -2.3; a <= 2.3; a += 0.1) {
+      for (double b = -1.0; b <= 1.0; b += 0.1) {
+        const Eigen::Vector3d q = pose * Eigen::Vector3d(a, b, 0.0);
+        ASSERT_EQ(w.surfaceClass(q.x(), q.y()), SurfaceClass::kRoad) << "t=" << time;
+      }
+    }
+  }
+  EXPECT_FALSE(loadTrajectoryYaml("/nonexistent.yaml", &t, &error));
+  EXPECT_FALSE(error.empty());
+}
+
+TEST(SimWorld, ColourClassImageUsesThePalette) {
+  const std::string heights = testing::TempDir() + "/sim_world_test_h.pgm";
+  const std::string classes = testing::TempDir() + "/sim_world_test_c.png";
+  {
+    std::ofstream f(heights, std::ios::binary);
+    f << "P5\n2 1\n255\n";
+    const unsigned char pixels[2] = {255, 0};
+    f.write(reinterpret_cast<const char*>(pixels), 2);
+  }
+  RgbImage image(2, 1);
+  uint8_t rgb[3];
+  classColor(SurfaceClass::kSidewalk, rgb);
+  image.set(0, 0, rgb[0], rgb[1], rgb[2]);
+  classColor(SurfaceClass::kCar, rgb);
+  image.set(1, 0, rgb[0] + 5, rgb[1] - 5, rgb[2]);  // near the car colour
+  std::string error;
+  ASSERT_TRUE(writePng(classes, image, &error)) << error;
+  World w;
+  ASSERT_TRUE(World::fromImage(heights, classes, ImageWorldOptions(), &w, &error)) << error;
+  EXPECT_EQ(w.cellClass(0, 0), SurfaceClass::kSidewalk);
+  EXPECT_EQ(w.cellClass(1, 0), SurfaceClass::kCar);
+  EXPECT_FLOAT_EQ(w.cellHeight(1, 0), 2.f);
+  std::remove(heights.c_str());
+  std::remove(classes.c_str());
 }
 
 }  // namespace
