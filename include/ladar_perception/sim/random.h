@@ -32,6 +32,33 @@ inline double gaussianAt(uint64_t seed, uint64_t counter) {
   return std::sqrt(-2.0 * std::log(u1)) * std::cos(6.283185307179586 * u2);
 }
 
+// The same stream as a Box-Muller pair per two counters: counter 2n is the cosine, 2n + 1 the
+// sine of pair n, so walking counters in order costs one log, sqrt and sincos per two
+// values. at() is a pure function of (seed, counter); the cache only saves work.
+class GaussianStream {
+ public:
+  explicit GaussianStream(uint64_t seed) : seed_(seed) {}
+  double at(uint64_t counter) {
+    const uint64_t pair = counter >> 1;
+    if (pair != pair_ || !valid_) {
+      const uint64_t a = mix64(seed_ ^ mix64(pair));
+      const double radius = std::sqrt(-2.0 * std::log(unitFromBits(a)));
+      const double angle = 6.283185307179586 * unitFromBits(mix64(a));
+      cos_ = radius * std::cos(angle);
+      sin_ = radius * std::sin(angle);
+      pair_ = pair;
+      valid_ = true;
+    }
+    return (counter & 1) ? sin_ : cos_;
+  }
+
+ private:
+  uint64_t seed_;
+  uint64_t pair_ = 0;
+  bool valid_ = false;
+  double cos_ = 0.0, sin_ = 0.0;
+};
+
 // A small sequential generator for world generation.
 class Rng {
  public:

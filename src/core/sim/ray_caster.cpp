@@ -60,6 +60,13 @@ bool setup(const World& world, const Eigen::Vector3d& origin, const Eigen::Vecto
 
 inline int clampInt(int v, int lo, int hi) { return v < lo ? lo : (v > hi ? hi : v); }
 
+// floor() to int without a libm call (baseline x86-64 has no rounding instruction); callers
+// clamp the result to the grid, and coordinates stay far inside int's range.
+inline int floorInt(double x) {
+  const int i = static_cast<int>(x);
+  return i - (x < static_cast<double>(i) ? 1 : 0);
+}
+
 // Class of a vertical face of cell (i, j) entered from the neighbour (pi, pj).
 inline SurfaceClass sideFaceClass(const World& world, int i, int j, int pi, int pj) {
   const SurfaceClass c = world.cellClass(i, j);
@@ -106,8 +113,8 @@ bool castRay(const World& world, const Eigen::Vector3d& origin, const Eigen::Vec
   double t, t_end;
   if (!setup(world, origin, direction, max_range, &r, &t, &t_end)) return false;
   const int nx = world.cellsX(), ny = world.cellsY();
-  int i = clampInt(static_cast<int>(std::floor(r.ou + r.du * t)), 0, nx - 1);
-  int j = clampInt(static_cast<int>(std::floor(r.ov + r.dv * t)), 0, ny - 1);
+  int i = clampInt(floorInt((r.ou + r.du * t)), 0, nx - 1);
+  int j = clampInt(floorInt((r.ov + r.dv * t)), 0, ny - 1);
   // A ray starting inside a column sees nothing; one entering the grid from outside below a
   // cell's top hits that cell's outer face.
   const float* h0 = world.levelData(0);
@@ -147,12 +154,12 @@ bool castRay(const World& world, const Eigen::Vector3d& origin, const Eigen::Vec
       if (tx <= ty) {
         i = r.sx > 0 ? (bi + 1) << level : (bi << level) - 1;
         const int lo = bj << level, hi = std::min(((bj + 1) << level) - 1, ny - 1);
-        j = clampInt(static_cast<int>(std::floor(r.ov + r.dv * t)), lo, hi);
+        j = clampInt(floorInt((r.ov + r.dv * t)), lo, hi);
         step_axis = 0;
       } else {
         j = r.sy > 0 ? (bj + 1) << level : (bj << level) - 1;
         const int lo = bi << level, hi = std::min(((bi + 1) << level) - 1, nx - 1);
-        i = clampInt(static_cast<int>(std::floor(r.ou + r.du * t)), lo, hi);
+        i = clampInt(floorInt((r.ou + r.du * t)), lo, hi);
         step_axis = 1;
       }
       if (i < 0 || j < 0 || i >= nx || j >= ny) return false;
@@ -180,8 +187,8 @@ bool castRayBruteForce(const World& world, const Eigen::Vector3d& origin,
   double t, t_end;
   if (!setup(world, origin, direction, max_range, &r, &t, &t_end)) return false;
   const int nx = world.cellsX(), ny = world.cellsY();
-  int i = clampInt(static_cast<int>(std::floor(r.ou + r.du * t)), 0, nx - 1);
-  int j = clampInt(static_cast<int>(std::floor(r.ov + r.dv * t)), 0, ny - 1);
+  int i = clampInt(floorInt((r.ou + r.du * t)), 0, nx - 1);
+  int j = clampInt(floorInt((r.ov + r.dv * t)), 0, ny - 1);
   if (r.oz + r.dz * t <= world.cellHeight(i, j)) {
     if (t <= 0.0) return false;
     hit->range = t;

@@ -52,9 +52,9 @@ void clearScan(SimulatedScan* out, CloudLayout (*make)(uint32_t)) {
 
 // Noisy range of ray `counter`, false when it falls outside [min, max].
 inline bool noisyRange(double true_range, double sigma, double min_range, double max_range,
-                       uint64_t seed, uint64_t counter, double* range) {
+                       GaussianStream* noise, uint64_t counter, double* range) {
   double r = true_range;
-  if (sigma > 0.0) r += sigma * gaussianAt(seed, counter);
+  if (sigma > 0.0) r += sigma * noise->at(counter);
   *range = r;
   return r >= min_range && r <= max_range;
 }
@@ -78,47 +78,81 @@ void simulateVelodyne(const World& world, const Eigen::Isometry3d& start,
     cos_el[l] = std::cos(e);
     sin_el[l] = std::sin(e);
   }
+  // Per-step azimuth and (for a moving sensor) pose.
+  thread_local std::vector<double> cos_az, sin_az;
+  thread_local std::vector<Eigen::Matrix3d> rotations;
+  thread_local std::vector<Eigen::Vector3d> origins;
+  cos_az.resize(steps);
+  sin_az.resize(steps);
+  for (int k = 0; k < steps; ++k) {
+    const double az = model.start_azimuth - kTwoPi * k / steps;  // clockwise from above
+    cos_az[k] = std::cos(az);
+    sin_az[k] = std::sin(az);
+  }
+  if (end) {
+    const Eigen::Quaterniond q0(start.linear()), q1(end->linear());
+    rotations.resize(steps);
+    origins.resize(steps);
+    for (int k = 0; k < steps; ++k) {
+      const double f = static_cast<double>(k) / steps;
+      rotations[k] = q0.slerp(f, q1).toRotationMatrix();
+      origins[k] = (1.0 - f) * start.translation() + f * end->translation();
+    }
+  }
+  // Pass 1 casts laser by laser: consecutive rays then land in neighbouring cells, which keeps
+  // the height field in cache (firing order jumps between near and far ranges).
   const std::size_t max_points = model.raysPerRevolution();
+  thread_local std::vector<double> hit_range;  // < 0: no hit
+  thread_local std::vector<float> hit_cos;
+  thread_local std::vector<uint8_t> hit_class;
+  hit_range.resize(max_points);
+  hit_cos.resize(max_points);
+  hit_class.resize(max_points);
+  const Eigen::Matrix3d R0 = start.linear();
+  const Eigen::Vector3d o0 = start.translation();
+  RayHit hit;
+  for (int l = 0; l < lasers; ++l) {
+    for (int k = 0; k < steps; ++k) {
+      const std::size_t ray = static_cast<std::size_t>(k) * lasers + l;
+      const Eigen::Vector3d ds(cos_el[l] * cos_az[k], cos_el[l] * sin_az[k], sin_el[l]);
+      const Eigen::Vector3d dw = end ? Eigen::Vector3d(rotations[k] * ds) : Eigen::Vector3d(R0 * ds);
+      if (!castRay(world, end ? origins[k] : o0, dw, model.max_range, &hit)) {
+        hit_range[ray] = -1.0;
+        continue;
+      }
+      hit_range[ray] = hit.range;
+      hit_cos[ray] = static_cast<float>(std::abs(hit.normal.cast<double>().dot(dw)));
+      hit_class[ray] = static_cast<uint8_t>(hit.surface);
+    }
+  }
+  // Pass 2 writes the returns in firing order (azimuth step, then ring) with their noise.
   const uint32_t step_bytes = 22;
   out->cloud.data.resize(max_points * step_bytes);
   out->truth.resize(max_points);
   uint8_t* dst = out->cloud.data.data();
   uint8_t* truth = out->truth.data();
   std::size_t count = 0;
-  const Eigen::Quaterniond q0(start.linear());
-  const Eigen::Quaterniond q1(end ? Eigen::Quaterniond(end->linear()) : q0);
-  Eigen::Matrix3d R = start.linear();
-  Eigen::Vector3d origin = start.translation();
   const double dt = model.period() / steps;
-  RayHit hit;
+  GaussianStream noise(seed);
   for (int k = 0; k < steps; ++k) {
-    const double az = model.start_azimuth - kTwoPi * k / steps;  // clockwise from above
-    const double ca = std::cos(az), sa = std::sin(az);
-    if (end) {
-      const double f = static_cast<double>(k) / steps;
-      R = q0.slerp(f, q1).toRotationMatrix();
-      origin = (1.0 - f) * start.translation() + f * end->translation();
-    }
     const float time = static_cast<float>(k * dt);
     for (int l = 0; l < lasers; ++l) {
-      const Eigen::Vector3d ds(cos_el[l] * ca, cos_el[l] * sa, sin_el[l]);
-      const Eigen::Vector3d dw = R * ds;
-      if (!castRay(world, origin, dw, model.max_range, &hit)) continue;
+      const std::size_t ray = static_cast<std::size_t>(k) * lasers + l;
+      if (hit_range[ray] < 0.0) continue;
       double r;
-      if (!noisyRange(hit.range, model.noise_sigma, model.min_range, model.max_range, seed,
-                      static_cast<uint64_t>(k) * lasers + l, &r)) {
+      if (!noisyRange(hit_range[ray], model.noise_sigma, model.min_range, model.max_range, &noise, ray, &r)) {
         continue;
       }
-      const float cos_inc = static_cast<float>(std::abs(hit.normal.cast<double>().dot(dw)));
-      putFloat(dst + 0, static_cast<float>(ds.x() * r));
-      putFloat(dst + 4, static_cast<float>(ds.y() * r));
-      putFloat(dst + 8, static_cast<float>(ds.z() * r));
-      putFloat(dst + 12, returnIntensity(hit.surface, cos_inc));
+      const double dx = cos_el[l] * cos_az[k], dy = cos_el[l] * sin_az[k], dz = sin_el[l];
+      putFloat(dst + 0, static_cast<float>(dx * r));
+      putFloat(dst + 4, static_cast<float>(dy * r));
+      putFloat(dst + 8, static_cast<float>(dz * r));
+      putFloat(dst + 12, returnIntensity(static_cast<SurfaceClass>(hit_class[ray]), hit_cos[ray]));
       const uint16_t ring = static_cast<uint16_t>(l);
       std::memcpy(dst + 16, &ring, 2);
       putFloat(dst + 18, time);
       dst += step_bytes;
-      truth[count++] = static_cast<uint8_t>(hit.surface);
+      truth[count++] = hit_class[ray];
     }
   }
   out->cloud.data.resize(count * step_bytes);
@@ -177,6 +211,7 @@ void simulateSickScan(const World& world, const Eigen::Isometry3d& sensor_in_wor
   std::size_t count = 0;
   const Eigen::Matrix3d R = sensor_in_world.linear();
   const Eigen::Vector3d origin = sensor_in_world.translation();
+  GaussianStream noise(seed);
   RayHit hit;
   for (int b = 0; b < beams; ++b) {
     const double a = model.angle_min + b * model.angle_increment;
@@ -184,7 +219,7 @@ void simulateSickScan(const World& world, const Eigen::Isometry3d& sensor_in_wor
     const Eigen::Vector3d dw = R * ds;
     if (!castRay(world, origin, dw, model.max_range, &hit)) continue;
     double r;
-    if (!noisyRange(hit.range, model.noise_sigma, model.min_range, model.max_range, seed, b, &r)) continue;
+    if (!noisyRange(hit.range, model.noise_sigma, model.min_range, model.max_range, &noise, b, &r)) continue;
     const float intensity =
         returnIntensity(hit.surface, static_cast<float>(std::abs(hit.normal.cast<double>().dot(dw))));
     out->ranges[b] = static_cast<float>(r);
@@ -217,6 +252,7 @@ void simulateStereoFrame(const World& world, const Eigen::Isometry3d& sensor_in_
   const Eigen::Vector3d origin = sensor_in_world.translation();
   // Pinhole image plane at x = 1: pixel centres spread over the field of view.
   const double half_w = std::tan(0.5 * model.horizontal_fov), half_h = std::tan(0.5 * model.vertical_fov);
+  GaussianStream noise(seed);
   RayHit hit;
   for (int row = 0; row < model.rows; ++row) {
     const double v = half_h * (1.0 - 2.0 * (row + 0.5) / model.rows);  // top row looks up
@@ -226,7 +262,7 @@ void simulateStereoFrame(const World& world, const Eigen::Isometry3d& sensor_in_
       const Eigen::Vector3d dw = R * ds;
       if (!castRay(world, origin, dw, model.max_range, &hit)) continue;
       double r;
-      if (!noisyRange(hit.range, model.noise_sigma, model.min_range, model.max_range, seed,
+      if (!noisyRange(hit.range, model.noise_sigma, model.min_range, model.max_range, &noise,
                       static_cast<uint64_t>(row) * model.columns + col, &r)) {
         continue;
       }
