@@ -311,6 +311,40 @@ TEST(SimScan, InvalidModelsGiveEmptyScans) {
   EXPECT_TRUE(scan.cloud.view(&view));
 }
 
+
+// With motion, each firing is cast from the pose interpolated to its time and its points are in
+// the sensor frame of that moment: azimuth step k equals a static revolution from that pose.
+TEST(SimScan, MovingRevolutionUsesThePoseOfEachFiring) {
+  const World& w = standard("urban");
+  VelodyneModel model = VelodyneModel::hdl64e(NoiseProfile::kNone);
+  model.azimuth_steps = 360;
+  const Eigen::Isometry3d a = w.drivePose(2.0) * at(0, 0, 1.9);
+  const Eigen::Isometry3d b = w.drivePose(2.1) * at(0, 0, 1.9);
+  SimulatedScan moving, still;
+  simulateVelodyneRevolution(w, a, b, model, 1, &moving);
+  const auto pm = points(moving);
+  for (int k : {0, 90, 180, 359}) {
+    const double f = static_cast<double>(k) / model.azimuth_steps;
+    Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+    pose.linear() = Eigen::Quaterniond(a.linear()).slerp(f, Eigen::Quaterniond(b.linear())).toRotationMatrix();
+    pose.translation() = (1 - f) * a.translation() + f * b.translation();
+    simulateVelodyneRevolution(w, pose, model, 1, &still);
+    const auto ps = points(still);
+    const float time = static_cast<float>(k * model.period() / model.azimuth_steps);
+    std::vector<Point> m_k, s_k;
+    for (const Point& p : pm) if (p.time == time) m_k.push_back(p);
+    for (const Point& p : ps) if (p.time == time) s_k.push_back(p);
+    ASSERT_EQ(m_k.size(), s_k.size()) << k;
+    ASSERT_GT(m_k.size(), 30u);
+    for (std::size_t i = 0; i < m_k.size(); ++i) {
+      EXPECT_EQ(m_k[i].ring, s_k[i].ring);
+      EXPECT_NEAR(m_k[i].x, s_k[i].x, 1e-4);
+      EXPECT_NEAR(m_k[i].y, s_k[i].y, 1e-4);
+      EXPECT_NEAR(m_k[i].z, s_k[i].z, 1e-4);
+    }
+  }
+}
+
 }  // namespace
 }  // namespace sim
 }  // namespace ladar_perception
