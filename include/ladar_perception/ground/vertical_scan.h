@@ -1,16 +1,17 @@
 // Vertical scan ground extraction for a Velodyne-style 3D ladar (thesis 3.3, algorithms.md).
-// DRAFT interface written by the package skeleton; the owner of the algorithm may extend the
-// params (keep cfg/VerticalScanGround.cfg, config/vertical_scan_ground.yaml and
-// src/ros/vertical_scan_params_ros.cpp in step with it).
+// Keep cfg/VerticalScanGround.cfg, config/vertical_scan_ground.yaml and the ROS adapter in step
+// with VerticalScanParams.
 #pragma once
 
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "ladar_perception/cloud/point_cloud_view.h"
 #include "ladar_perception/ground/ground_classification.h"
+#include "ladar_perception/ground/ground_model.h"
 #include "ladar_perception/ground/obstacle_probability.h"
 
 namespace ladar_perception {
@@ -38,6 +39,9 @@ struct VerticalScanParams {
   // --- Beyond the thesis (5.1.2 future work). All off in the thesis mode.
   bool bend_ground_line = true;           // piecewise ground line: slope may change with r
   float segment_length = 10.0f;           // radial length of one ground-line segment [m]
+  float max_bend = 0.15f;                 // largest slope change from one segment to the next
+  float segment_gate = 0.3f;              // height residual [m] at which a return stops
+                                          // counting as ground evidence for a segment
   bool couple_columns = true;             // neighbouring columns share ground evidence
   int coupling_radius = 2;                // columns on each side that are coupled
   int min_ground_returns = 3;             // fewer feasible returns: borrow from neighbours
@@ -49,9 +53,137 @@ VerticalScanParams verticalScanThesisParams();
 VerticalScanParams verticalScanDefaultParams();
 
 // The vertical scan method as a GroundModel with the given params (used by the nodelet, which
-// rebuilds the model when dynamic_reconfigure changes a parameter). Declared here by the lead
-// for the ROS adapter; implement it next to the algorithm.
-class GroundModel;
+// rebuilds the model when dynamic_reconfigure changes a parameter).
 std::unique_ptr<GroundModel> makeVerticalScanModel(const VerticalScanParams& params);
+
+// Row assignment from the elevation angle for clouds without a `ring` field: a lookup table
+// over tan(elevation) = z / r whose cells hold the nearest laser's row (the row index is the
+// laser's position in the table sorted ascending, so it matches the velodyne driver's ring).
+// Elevations outside the table go to the nearest end row.
+class ElevationRowTable {
+ public:
+  void build(const std::vector<float>& elevations_deg);
+  int rows() const { return rows_; }
+  // Row of a return at height z and horizontal distance r > 0 (sensor frame).
+  int row(float z, float r) const {
+    const float t = z / r;
+    float f = (t - t_min_) * inv_cell_;
+    f = f < 0.f ? 0.f : (f > max_cell_ ? max_cell_ : f);
+    return lut_[static_cast<int>(f)];
+  }
+
+ private:
+  std::vector<uint8_t> lut_;
+  float t_min_ = 0.f;
+  float inv_cell_ = 1.f;
+  float max_cell_ = 0.f;
+  int rows_ = 0;
+};
+
+// One vertical scan (3.3 step 2): the representative returns of one azimuth column, sorted by
+// increasing HorizontalDistance r. The column-level equations, exposed for the unit tests.
+namespace vertical_scan {
+
+// Eq 3.4: Slope_i = Height_i / r_i lies strictly between GroundSlopeMin and GroundSlopeMax.
+inline bool feasible(float height, float r, const VerticalScanParams& p) {
+  const float slope = height / r;
+  return slope > p.ground_slope_min && slope < p.ground_slope_max;
+}
+
+// Eqs 3.4-3.9 on one column: feasibility, upper-half rejection (3.5), then `iterations`
+// rounds of the weighted slope estimate seeded with `seed` (0 in the thesis). r must be sorted
+// ascending. `weights` is scratch of at least n floats. Returns the SlopeEstimate; *support
+// (optional) receives the number of returns that took part in the fit.
+float estimateSlope(const float* r, const float* height, int n, const VerticalScanParams& p,
+                    float seed, float* weights, int* support = nullptr);
+
+// Eq 3.10 and 3.11 for a straight ground line through the ground point under the sensor.
+inline float groundError(float slope_estimate, float r, float height) {
+  return slope_estimate * r - height;
+}
+inline float slopeError(float slope_estimate, float r, float height) {
+  return slope_estimate - height / r;
+}
+
+// A column's ground line: heights of the ground at the knots r = k * segment_length,
+// k = 0..knots-1 (knot 0 is the ground point under the sensor, height 0). The thesis line is
+// the special case of equal slopes. Evaluated by linear interpolation, constant slope beyond
+// the last knot.
+struct GroundLine {
+  const float* knot_height = nullptr;
+  int knots = 0;
+  float inv_segment = 1.f;
+
+  float heightAt(float r) const {
+    const float f = r * inv_segment;
+    int k = static_cast<int>(f);
+    if (k > knots - 2) k = knots - 2;
+    const float t = f - static_cast<float>(k);
+    return knot_height[k] + (knot_height[k + 1] - knot_height[k]) * t;
+  }
+};
+
+// The bent ground line (beyond the thesis, 5.1.2): starting from the straight estimate
+// `slope0`, each segment's slope is re-estimated from the returns inside it with weights that
+// fall off with the height residual to the line so far (gate), are monotone in r (as eq 3.7)
+// and biased downward (as eq 3.6); a segment may bend by at most max_bend. Writes `knots`
+// heights and each segment's support (sum of raw weights) into knot_height / segment_support.
+void fitBentLine(const float* r, const float* height, int n, const VerticalScanParams& p,
+                 float slope0, int knots, float* knot_height, float* segment_support,
+                 float* weights);
+
+}  // namespace vertical_scan
+
+// The vertical scan ground model. Keep one instance per stream: its workspace buffers are
+// reused, so steady-state scans do not allocate.
+class VerticalScanGround : public GroundModel {
+ public:
+  explicit VerticalScanGround(const VerticalScanParams& params = verticalScanDefaultParams(),
+                              std::string name = "vertical_scan");
+  std::string name() const override { return name_; }
+  void classify(const PointCloudView& view, const SensorPose& pose,
+                GroundClassification* out) override;
+
+  const VerticalScanParams& params() const { return params_; }
+  void setParams(const VerticalScanParams& params);
+
+  // Introspection of the last scan (tests, visualisation).
+  int columns() const { return columns_; }
+  int knotsPerColumn() const { return knots_; }
+  // Ground height under the column `col` at horizontal distance r, in the ground frame.
+  float groundHeight(int col, float r) const;
+  int columnOf(float x, float y) const;
+
+ private:
+  template <bool kRing, bool kTilted>
+  void binPoints(const PointCloudView& view, const SensorPose& pose, GroundClassification* out);
+  void fitColumns();
+  void labelPoints(GroundClassification* out);
+
+  VerticalScanParams params_;
+  std::string name_;
+  ElevationRowTable row_table_;
+  int columns_ = 0;
+  int rows_ = 0;       // rows per column in the bin grid
+  int knots_ = 0;      // knots per column's ground line
+  float inv_column_width_ = 0.f;  // columns per radian
+  float inv_segment_ = 0.f;
+
+  // Per-scan workspace, reused.
+  std::vector<float> r_;          // horizontal distance per input point (ground frame)
+  std::vector<float> height_;     // height per input point (ground frame)
+  std::vector<uint32_t> bin_;     // bin per input point, kInvalidBin for unknown
+  std::vector<uint32_t> bin_start_;   // counting sort of points by bin
+  std::vector<uint32_t> order_;
+  std::vector<float> order_r_;
+  std::vector<float> col_r_, col_h_, col_w_;   // one column's representatives
+  std::vector<float> knot_height_;             // columns_ x knots_
+  std::vector<float> knot_support_;            // columns_ x knots_
+  std::vector<float> coupled_;                 // columns_ x knots_
+  std::vector<float> column_slope_;            // straight estimate per column
+  std::vector<int> column_support_;
+  std::vector<int> column_count_;
+  std::vector<std::pair<float, uint32_t>> median_scratch_;
+};
 
 }  // namespace ladar_perception
