@@ -1,0 +1,391 @@
+#include "ladar_perception/ros/hough_ground_ros.h"
+
+#include <algorithm>
+#include <cmath>
+#include <exception>
+#include <sstream>
+
+#include <tf2_eigen/tf2_eigen.h>
+#include <visualization_msgs/Marker.h>
+
+#include "ladar_perception/cloud/laser_scan.h"
+#include "ladar_perception/ros/cloud_conversion.h"
+
+namespace ladar_perception {
+
+HoughGroundParams toHoughGroundParams(const HoughGroundConfig& c) {
+  HoughGroundParams p = c.method == "thesis" ? houghGroundThesisParams() : houghGroundDefaultParams();
+  p.ground_min = static_cast<float>(c.ground_min);
+  p.ground_max = static_cast<float>(c.ground_max);
+  p.ground_resolution = static_cast<float>(c.ground_resolution);
+  p.slope_min = static_cast<float>(c.slope_min);
+  p.slope_max = static_cast<float>(c.slope_max);
+  p.slope_resolution = static_cast<float>(c.slope_resolution);
+  p.error_tolerance = static_cast<float>(c.error_tolerance);
+  p.min_fit_distance = static_cast<float>(c.min_fit_distance);
+  p.max_fit_distance = static_cast<float>(c.max_fit_distance);
+  p.min_inliers = c.min_inliers;
+  p.refine = c.refine;
+  p.refine_iterations = c.refine_iterations;
+  p.tolerances.gnd_error_max_base = static_cast<float>(c.gnd_error_max_base);
+  p.tolerances.gnd_error_max_per_m = static_cast<float>(c.gnd_error_max_per_m);
+  p.tolerances.slope_error_max_base = static_cast<float>(c.slope_error_max_base);
+  p.tolerances.slope_error_max_per_m = static_cast<float>(c.slope_error_max_per_m);
+  p.tolerances.obstacle_threshold = static_cast<float>(c.obstacle_threshold);
+  return p;
+}
+
+void loadHoughMethodSettings(const std::string& method, HoughGroundConfig* c) {
+  const HoughGroundParams p = method == "thesis" ? houghGroundThesisParams() : houghGroundDefaultParams();
+  c->ground_min = p.ground_min;
+  c->ground_max = p.ground_max;
+  c->ground_resolution = p.ground_resolution;
+  c->slope_min = p.slope_min;
+  c->slope_max = p.slope_max;
+  c->slope_resolution = p.slope_resolution;
+  c->error_tolerance = p.error_tolerance;
+  c->min_fit_distance = p.min_fit_distance;
+  c->max_fit_distance = p.max_fit_distance;
+  c->min_inliers = p.min_inliers;
+  c->refine = p.refine;
+  c->refine_iterations = p.refine_iterations;
+  c->gnd_error_max_base = p.tolerances.gnd_error_max_base;
+  c->gnd_error_max_per_m = p.tolerances.gnd_error_max_per_m;
+  c->slope_error_max_base = p.tolerances.slope_error_max_base;
+  c->slope_error_max_per_m = p.tolerances.slope_error_max_per_m;
+  c->obstacle_threshold = p.tolerances.obstacle_threshold;
+}
+
+HoughGroundRos::HoughGroundRos(ros::NodeHandle nh, ros::NodeHandle private_nh)
+    : nh_(nh), private_nh_(private_nh), diagnostics_(nh, private_nh) {
+  ground_frame_ = private_nh_.param<std::string>("ground_frame", "base_footprint");
+  use_tf_ = private_nh_.param("use_tf", true);
+  mount_roll_ = private_nh_.param("mount_roll", mount_roll_);
+  mount_pitch_ = private_nh_.param("mount_pitch", mount_pitch_);
+  const int queue_size = private_nh_.param("queue_size", 5);
+  const double tf_tolerance = private_nh_.param("tf_tolerance", 0.05);
+  expected_rate_min_ = private_nh_.param("expected_rate_min", 50.0);
+  expected_rate_max_ = private_nh_.param("expected_rate_max", 100.0);
+
+  ground_pub_ = nh_.advertise<sensor_msgs::PointCloud2>("ground", 5);
+  obstacles_pub_ = nh_.advertise<sensor_msgs::PointCloud2>("obstacles", 5);
+  classified_pub_ = nh_.advertise<sensor_msgs::PointCloud2>("classified", 5);
+  line_pub_ = nh_.advertise<visualization_msgs::Marker>("ground_line", 5);
+  fit_pub_ = nh_.advertise<HoughGroundFit>("ground_fit", 5);
+
+  diagnostics_.setHardwareID("none");
+  rate_status_.reset(new diagnostic_updater::FrequencyStatus(
+      diagnostic_updater::FrequencyStatusParam(&expected_rate_min_, &expected_rate_max_, 0.1, 10)));
+  diagnostics_.add(*rate_status_);
+  diagnostics_.add("hough ground", this, &HoughGroundRos::diagnose);
+  diagnostics_timer_ = private_nh_.createTimer(ros::Duration(1.0), [this](const ros::TimerEvent&) {
+    try {
+      diagnostics_.update();
+    } catch (const std::exception& e) {
+      ROS_ERROR_THROTTLE(10.0, "HoughGround: diagnostics update failed: %s", e.what());
+    }
+  });
+
+  // The parameters given explicitly at start-up, noted before the dynamic_reconfigure server
+  // writes every parameter to the parameter server.
+  for (const auto& param : HoughGroundConfig::__getParamDescriptions__()) {
+    if (param->name != "method" && private_nh_.hasParam(param->name)) explicit_params_.push_back(param->name);
+  }
+  reconfigure_server_.reset(new dynamic_reconfigure::Server<HoughGroundConfig>(private_nh_));
+  reconfigure_server_->setCallback(
+      [this](HoughGroundConfig& config, uint32_t level) { reconfigure(config, level); });
+
+  // Subscribe last.
+  if (use_tf_) {
+    tf_listener_.reset(new tf2_ros::TransformListener(tf_buffer_, nh_));
+    scan_sub_.subscribe(nh_, "scan", queue_size);
+    tf_filter_.reset(new tf2_ros::MessageFilter<sensor_msgs::LaserScan>(
+        scan_sub_, tf_buffer_, ground_frame_, queue_size, nh_));
+    tf_filter_->setTolerance(ros::Duration(tf_tolerance));
+    tf_filter_->registerCallback(&HoughGroundRos::scanCallback, this);
+    tf_filter_->registerFailureCallback(
+        [this](const sensor_msgs::LaserScanConstPtr& msg,
+               tf2_ros::filter_failure_reasons::FilterFailureReason reason) { tfFailure(msg, reason); });
+  } else {
+    direct_sub_ = nh_.subscribe("scan", queue_size, &HoughGroundRos::scanCallback, this);
+  }
+  ROS_INFO("HoughGround: listening on %s, ground frame %s%s", nh_.resolveName("scan").c_str(),
+           ground_frame_.c_str(), use_tf_ ? "" : " (tf off: fixed mount)");
+}
+
+HoughGroundRos::~HoughGroundRos() {
+  diagnostics_timer_.stop();
+  if (tf_filter_) tf_filter_->clear();
+}
+
+sensor_msgs::PointCloud2ConstPtr HoughGroundRos::lastClassified() const {
+  std::lock_guard<std::mutex> lock(last_mutex_);
+  return last_classified_.lock();
+}
+
+void HoughGroundRos::reconfigure(HoughGroundConfig& config, uint32_t level) {
+  std::lock_guard<std::mutex> lock(config_mutex_);
+  const bool initial = last_method_.empty();
+  if (!initial && config.method != last_method_) {
+    // A new method: load its settings into every threshold (the user tunes from there).
+    loadHoughMethodSettings(config.method, &config);
+  } else if (initial && config.method != "default") {
+    // Start-up with a non-default method: its settings, except thresholds given explicitly.
+    loadHoughMethodSettings(config.method, &config);
+    for (const auto& param : HoughGroundConfig::__getParamDescriptions__()) {
+      if (std::find(explicit_params_.begin(), explicit_params_.end(), param->name) !=
+          explicit_params_.end()) {
+        param->fromServer(private_nh_, config);
+      }
+    }
+  }
+  last_method_ = config.method;
+  config_ = config;
+  config_changed_ = true;
+}
+
+void HoughGroundRos::reportError(const std::string& kind, const std::string& detail) {
+  uint64_t suppressed = 0;
+  if (health_.report(kind, &suppressed)) {
+    if (suppressed > 0) {
+      ROS_ERROR("HoughGround: %s: %s (%lu more of this kind since the last message)", kind.c_str(),
+                detail.c_str(), static_cast<unsigned long>(suppressed));
+    } else {
+      ROS_ERROR("HoughGround: %s: %s", kind.c_str(), detail.c_str());
+    }
+  }
+}
+
+void HoughGroundRos::tfFailure(const sensor_msgs::LaserScanConstPtr& msg,
+                               tf2_ros::filter_failure_reasons::FilterFailureReason reason) {
+  try {
+    std::ostringstream s;
+    s << "scan at " << msg->header.stamp << " dropped: no transform " << ground_frame_ << " <- '"
+      << msg->header.frame_id << "' (";
+    switch (reason) {
+      case tf2_ros::filter_failure_reasons::OutTheBack: s << "scan older than the tf buffer"; break;
+      case tf2_ros::filter_failure_reasons::EmptyFrameID: s << "empty frame_id"; break;
+      default: s << "transform not available in time"; break;
+    }
+    s << ")";
+    uint64_t suppressed = 0;
+    if (health_.dropped("missing tf", &suppressed)) {
+      ROS_WARN("HoughGround: %s (%lu more since the last message)", s.str().c_str(),
+               static_cast<unsigned long>(suppressed));
+    }
+  } catch (const std::exception& e) {
+    ROS_ERROR_THROTTLE(5.0, "HoughGround: tf failure handler: %s", e.what());
+  }
+}
+
+void HoughGroundRos::scanCallback(const sensor_msgs::LaserScanConstPtr& msg) {
+  // No exception may leave a callback: it would take down every nodelet of the manager.
+  try {
+    process(msg);
+  } catch (const std::exception& e) {
+    reportError("internal error", e.what());
+  } catch (...) {
+    reportError("internal error", "unknown exception");
+  }
+}
+
+bool HoughGroundRos::sensorPose(const sensor_msgs::LaserScan& msg, SensorPose* pose) {
+  if (!use_tf_) {
+    // A fixed mount: roll (pi/2 = the scan plane vertical, sensor y up) and pitch about the
+    // ground frame's axes, sensor_height above the ground.
+    Eigen::Isometry3f t = Eigen::Isometry3f::Identity();
+    t.linear() = (Eigen::AngleAxisf(static_cast<float>(mount_pitch_), Eigen::Vector3f::UnitY()) *
+                  Eigen::AngleAxisf(static_cast<float>(mount_roll_), Eigen::Vector3f::UnitX()))
+                     .toRotationMatrix();
+    t.translation() = Eigen::Vector3f(0.f, 0.f, sensor_height_);
+    pose->sensor_to_ground = t;
+    return true;
+  }
+  geometry_msgs::TransformStamped t;
+  try {
+    t = tf_buffer_.lookupTransform(ground_frame_, msg.header.frame_id, msg.header.stamp);
+  } catch (const tf2::TransformException& e) {
+    if (health_.dropped("missing tf")) ROS_WARN("HoughGround: %s", e.what());
+    return false;
+  }
+  // scan frame -> ground frame; shift so the origin is the ground point under the sensor.
+  Eigen::Isometry3d sensor_to_ground = tf2::transformToEigen(t);
+  sensor_to_ground.translation().x() = 0.0;
+  sensor_to_ground.translation().y() = 0.0;
+  pose->sensor_to_ground = sensor_to_ground.cast<float>();
+  return true;
+}
+
+void HoughGroundRos::process(const sensor_msgs::LaserScanConstPtr& msg) {
+  last_input_.store(msg.get());
+  rate_status_->tick();
+  std::lock_guard<std::mutex> process_lock(process_mutex_);
+  {
+    std::lock_guard<std::mutex> lock(config_mutex_);
+    if (config_changed_) {
+      hough_.setParams(toHoughGroundParams(config_));
+      sensor_height_ = static_cast<float>(config_.sensor_height);
+      config_changed_ = false;
+    }
+  }
+  LaserScanView scan;
+  scan.angle_min = msg->angle_min;
+  scan.angle_increment = msg->angle_increment;
+  scan.range_min = msg->range_min;
+  scan.range_max = msg->range_max;
+  scan.ranges = msg->ranges.data();
+  scan.size = msg->ranges.size();
+  // Intensities are optional; a mismatched array is ignored rather than trusted.
+  scan.intensities = msg->intensities.size() == msg->ranges.size() ? msg->intensities.data() : nullptr;
+  std::string error;
+  if (!validateLaserScan(scan, &error)) {
+    reportError("unreadable scan", "frame '" + msg->header.frame_id + "': " + error);
+    return;
+  }
+  SensorPose pose;
+  if (!sensorPose(*msg, &pose)) return;
+
+  const ros::WallTime start = ros::WallTime::now();
+  if (!hough_.classify(scan, pose, &result_, &error)) {
+    reportError("unreadable scan", error);
+    return;
+  }
+  health_.processed((ros::WallTime::now() - start).toSec());
+  {
+    std::lock_guard<std::mutex> lock(fit_mutex_);
+    last_fit_ = result_.fit;
+    if (!result_.fit.valid) ++scans_without_line_;
+  }
+
+  // The scan's returns as a cloud (scan frame, one point per return, NaN for no return), built
+  // fresh: the input of the output builders.
+  const bool want_cloud = ground_pub_.getNumSubscribers() > 0 ||
+                          obstacles_pub_.getNumSubscribers() > 0 ||
+                          classified_pub_.getNumSubscribers() > 0;
+  if (want_cloud) {
+    sensor_msgs::PointCloud2 points;
+    points.header = msg->header;
+    const CloudLayout layout = laserScanLayout(static_cast<uint32_t>(scan.size));
+    for (const FieldDesc& f : layout.fields) {
+      sensor_msgs::PointField pf;
+      pf.name = f.name;
+      pf.offset = f.offset;
+      pf.datatype = f.datatype;
+      pf.count = f.count;
+      points.fields.push_back(pf);
+    }
+    points.height = 1;
+    points.width = layout.width;
+    points.point_step = layout.point_step;
+    points.row_step = layout.row_step;
+    points.is_bigendian = false;
+    points.is_dense = false;
+    points.data.resize(static_cast<std::size_t>(layout.row_step));
+    cloud_projector_.projectPacked(scan, points.data.data());
+    CloudLayout view_layout;
+    PointCloudView view;
+    if (!viewOf(points, &view_layout, &view, &error)) {
+      reportError("internal error", "projected scan: " + error);
+      return;
+    }
+    // Fresh messages, published as ConstPtr and never touched again.
+    if (ground_pub_.getNumSubscribers() > 0) {
+      ground_pub_.publish(sensor_msgs::PointCloud2ConstPtr(
+          subsetCloud(points, view, result_.classification, kLabelGround)));
+    }
+    if (obstacles_pub_.getNumSubscribers() > 0) {
+      obstacles_pub_.publish(sensor_msgs::PointCloud2ConstPtr(
+          subsetCloud(points, view, result_.classification, kLabelObstacle)));
+    }
+    if (classified_pub_.getNumSubscribers() > 0) {
+      sensor_msgs::PointCloud2ConstPtr classified = classifiedCloud(points, view, result_.classification);
+      {
+        std::lock_guard<std::mutex> lock(last_mutex_);
+        last_classified_ = classified;
+      }
+      classified_pub_.publish(classified);
+    }
+  }
+  publishLine(*msg, result_);
+}
+
+void HoughGroundRos::publishLine(const sensor_msgs::LaserScan& msg, const ScanGroundResult& result) {
+  const GroundLineFit& f = result.fit;
+  const std::string& frame = ground_frame_;
+  if (fit_pub_.getNumSubscribers() > 0) {
+    HoughGroundFitPtr out(new HoughGroundFit);
+    out->header.stamp = msg.header.stamp;
+    out->header.frame_id = frame;
+    out->scan_frame = msg.header.frame_id;
+    out->valid = f.valid;
+    out->ground = f.ground;
+    out->slope = f.slope;
+    out->direction.x = result.direction.x();
+    out->direction.y = result.direction.y();
+    out->direction.z = 0.0;
+    out->signed_r = result.signed_r;
+    out->votes = f.votes;
+    out->inliers = f.inliers;
+    out->runner_up = f.runner_up;
+    out->margin = f.margin;
+    out->rms = f.rms;
+    out->r_min = f.r_min;
+    out->r_max = f.r_max;
+    out->ground_returns = static_cast<int32_t>(result.classification.count(kLabelGround));
+    out->obstacle_returns = static_cast<int32_t>(result.classification.count(kLabelObstacle));
+    out->unknown_returns = static_cast<int32_t>(result.classification.count(kLabelUnknown));
+    fit_pub_.publish(HoughGroundFitConstPtr(out));
+  }
+  if (line_pub_.getNumSubscribers() > 0) {
+    visualization_msgs::MarkerPtr m(new visualization_msgs::Marker);
+    m->header.stamp = msg.header.stamp;
+    m->header.frame_id = frame;
+    m->ns = "hough_ground/" + msg.header.frame_id;
+    m->id = 0;
+    m->type = visualization_msgs::Marker::LINE_STRIP;
+    m->pose.orientation.w = 1.0;
+    if (!f.valid) {
+      m->action = visualization_msgs::Marker::DELETE;
+    } else {
+      m->action = visualization_msgs::Marker::ADD;
+      m->scale.x = 0.05;
+      m->color.r = 0.1f;
+      m->color.g = 0.9f;
+      m->color.b = 0.2f;
+      m->color.a = 1.0f;
+      m->lifetime = ros::Duration(0.5);
+      // The fitted line over the extent of its inliers, at the ground frame's origin under the
+      // sensor (the adapter zeroes the sensor's x, y offset).
+      for (float r : {f.r_min, f.r_max}) {
+        geometry_msgs::Point p;
+        p.x = r * result.direction.x();
+        p.y = r * result.direction.y();
+        p.z = f.ground + f.slope * r;
+        m->points.push_back(p);
+      }
+    }
+    line_pub_.publish(visualization_msgs::MarkerConstPtr(m));
+  }
+}
+
+void HoughGroundRos::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) {
+  health_.fillDiagnostics(status);
+  {
+    std::lock_guard<std::mutex> lock(config_mutex_);
+    status.add("method", config_.method);
+  }
+  status.add("ground frame", use_tf_ ? ground_frame_ : std::string("(tf off)"));
+  std::lock_guard<std::mutex> lock(fit_mutex_);
+  status.add("last fit valid", last_fit_.valid);
+  status.add("last Ground [m]", last_fit_.ground);
+  status.add("last Slope", last_fit_.slope);
+  status.add("last inliers", last_fit_.inliers);
+  status.add("last margin", last_fit_.margin);
+  status.add("scans without a ground line", scans_without_line_);
+  if (health_.processedCount() > 0 && !last_fit_.valid &&
+      status.level == diagnostic_msgs::DiagnosticStatus::OK) {
+    status.summary(diagnostic_msgs::DiagnosticStatus::WARN, "no ground line in the last scan");
+  }
+}
+
+}  // namespace ladar_perception
