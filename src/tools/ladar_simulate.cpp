@@ -37,6 +37,8 @@ Vehicle (default: the world's standard drive):
 Sensors:
   --sensors YAML           sensor rig (default: the thesis vehicle = config/sensors.yaml)
   --noise PROFILE          table4.1 (default) | datasheet | none, for every sensor
+  --velodyne-sigma M       range noise of the Velodyne(s), metres (after --noise)
+  --velodyne-max-range M   Velodyne max range (Table 4.1: 60 m; the unit reaches 120 m)
   --motion-distortion      Velodyne points move with the vehicle during a revolution
 Output:
   --out BAG                the rosbag
@@ -78,7 +80,7 @@ bool parseArgs(int argc, char** argv, Args* args, std::string* error) {
   static const char* kKnown[] = {"--world", "--world-image", "--class-image", "--metres-per-pixel",
                                  "--height-scale", "--seed", "--trajectory", "--random-poses",
                                  "--pose-radius", "--pose-yaw", "--pose-hold", "--loop", "--sensors",
-                                 "--noise", "--motion-distortion", "--out", "--duration",
+                                 "--noise", "--velodyne-sigma", "--velodyne-max-range", "--motion-distortion", "--out", "--duration",
                                  "--extrinsics", "--no-truth", "--tf-rate", "--start-time",
                                  "--compression", "--png", "--png-only", "--help", "-h"};
   for (const auto& kv : args->values) {
@@ -189,6 +191,15 @@ int main(int argc, char** argv) {
       return fail("unknown --noise '" + args.get("--noise") + "' (table4.1, datasheet, none)");
     }
     rig.setNoise(profile);
+  }
+  for (sim::SensorMount& s : rig.sensors) {
+    if (s.kind != sim::SensorKind::kVelodyne) continue;
+    if (!number("--velodyne-sigma", s.velodyne.noise_sigma, &s.velodyne.noise_sigma) ||
+        !number("--velodyne-max-range", s.velodyne.max_range, &s.velodyne.max_range)) {
+      return fail(error);
+    }
+    const std::string invalid = s.velodyne.validate();
+    if (!invalid.empty()) return fail(invalid);
   }
 
   // --- Bag.
