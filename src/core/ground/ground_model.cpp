@@ -1,13 +1,16 @@
 // Ground models by name (ground_segment --method, the nodelets' `method` parameter).
 #include "ladar_perception/ground/ground_model.h"
 
+#include "ladar_perception/ground/analog_signal.h"
+#include "ladar_perception/ground/hough_ground.h"
+#include "ladar_perception/ground/plane_fit.h"
 #include "ladar_perception/ground/vertical_scan.h"
 
 namespace ladar_perception {
 
 std::vector<std::string> groundModelNames() {
   // The default first.
-  return {"vertical_scan", "vertical_scan_thesis"};
+  return {"vertical_scan", "vertical_scan_thesis", "hough", "plane", "analog_signal"};
 }
 
 std::unique_ptr<GroundModel> makeGroundModel(const std::string& name, std::string* error) {
@@ -18,6 +21,11 @@ std::unique_ptr<GroundModel> makeGroundModel(const std::string& name, std::strin
     return std::make_unique<VerticalScanGround>(verticalScanThesisParams(),
                                                 "vertical_scan_thesis");
   }
+  // The Hough ground fit (3.3.4) on each azimuth column of a 3D cloud as one vertical scan.
+  if (name == "hough") return makeHoughColumnsModel();
+  // The thesis's ground baselines: Algorithm 1 (3.1) and the analog signal approach (3.2).
+  if (name == "plane") return std::make_unique<PlaneFitGround>();
+  if (name == "analog_signal") return std::make_unique<AnalogSignalGround>();
   if (error) {
     std::string list;
     for (const std::string& n : groundModelNames()) list += (list.empty() ? "" : ", ") + n;
