@@ -84,10 +84,14 @@ TEST(SimRayCaster, PyramidMatchesCellByCellTraversal) {
       const Eigen::Vector3d origin = pose * Eigen::Vector3d(rng.uniform(-1, 1), rng.uniform(-1, 1),
                                                             rng.uniform(0.3, 3.0));
       const Eigen::Vector3d dir = direction(rng.uniform(-M_PI, M_PI), rng.uniform(-0.6, 0.05));
-      RayHit fast, slow;
+      RayHit fast, slow, hinted;
       const bool a = castRay(w, origin, dir, 120.0, &fast);
       const bool b = castRayBruteForce(w, origin, dir, 120.0, &slow);
       ASSERT_EQ(a, b) << name << " ray " << k;
+      // Any start level gives the same hit.
+      const int level = (k % 3 == 0) ? startLevelFor(w, origin) : rng.uniformInt(0, w.pyramidLevels() - 1);
+      ASSERT_EQ(castRay(w, origin, dir, 120.0, level, &hinted), a) << name << " ray " << k;
+      if (a) EXPECT_EQ(hinted.range, fast.range) << name << " ray " << k;
       if (!a) continue;
       ++hits;
       EXPECT_NEAR(fast.range, slow.range, 1e-9) << name << " ray " << k;

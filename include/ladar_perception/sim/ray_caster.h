@@ -25,6 +25,13 @@ struct RayHit {
 bool castRay(const World& world, const Eigen::Vector3d& origin, const Eigen::Vector3d& direction,
              double max_range, RayHit* hit);
 
+// The same, starting the pyramid traversal at `start_level` instead of the top (any level gives
+// the same result; a good one saves descents). startLevelFor() picks one for rays from a
+// sensor origin: the largest block around it whose highest cell is below the origin (-1: top).
+bool castRay(const World& world, const Eigen::Vector3d& origin, const Eigen::Vector3d& direction,
+             double max_range, int start_level, RayHit* hit);
+int startLevelFor(const World& world, const Eigen::Vector3d& origin);
+
 // Reference implementation for tests: visits every cell along the ray (no pyramid). Same
 // results as castRay, slower.
 bool castRayBruteForce(const World& world, const Eigen::Vector3d& origin,

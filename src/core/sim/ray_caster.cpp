@@ -109,6 +109,23 @@ inline void resolveCellHit(const World& world, const GridRay& r, int i, int j, f
 
 bool castRay(const World& world, const Eigen::Vector3d& origin, const Eigen::Vector3d& direction,
              double max_range, RayHit* hit) {
+  return castRay(world, origin, direction, max_range, -1, hit);
+}
+
+int startLevelFor(const World& world, const Eigen::Vector3d& origin) {
+  if (!world.finalized()) return -1;
+  const int ix = world.cellX(origin.x()), iy = world.cellY(origin.y());
+  if (!world.validCell(ix, iy)) return -1;
+  int best = -1;
+  for (int l = 0; l < world.pyramidLevels(); ++l) {
+    const float h = world.levelData(l)[static_cast<std::size_t>(iy >> l) * world.levelWidth(l) + (ix >> l)];
+    if (h < origin.z()) best = l; else break;
+  }
+  return best;
+}
+
+bool castRay(const World& world, const Eigen::Vector3d& origin, const Eigen::Vector3d& direction,
+             double max_range, int start_level, RayHit* hit) {
   GridRay r;
   double t, t_end;
   if (!setup(world, origin, direction, max_range, &r, &t, &t_end)) return false;
@@ -135,7 +152,7 @@ bool castRay(const World& world, const Eigen::Vector3d& origin, const Eigen::Vec
   }
   // The boundary ahead of block b along an axis is (b + e) << level.
   const int ex = r.sx > 0 ? 1 : 0, ey = r.sy > 0 ? 1 : 0;
-  int level = top;
+  int level = start_level >= 0 && start_level < top ? start_level : top;
   int step_axis = -1;
   for (;;) {
     const int bi = i >> level, bj = j >> level;

@@ -110,13 +110,14 @@ void simulateVelodyne(const World& world, const Eigen::Isometry3d& start,
   hit_class.resize(max_points);
   const Eigen::Matrix3d R0 = start.linear();
   const Eigen::Vector3d o0 = start.translation();
+  const int start_level = startLevelFor(world, o0);
   RayHit hit;
   for (int l = 0; l < lasers; ++l) {
     for (int k = 0; k < steps; ++k) {
       const std::size_t ray = static_cast<std::size_t>(k) * lasers + l;
       const Eigen::Vector3d ds(cos_el[l] * cos_az[k], cos_el[l] * sin_az[k], sin_el[l]);
       const Eigen::Vector3d dw = end ? Eigen::Vector3d(rotations[k] * ds) : Eigen::Vector3d(R0 * ds);
-      if (!castRay(world, end ? origins[k] : o0, dw, model.max_range, &hit)) {
+      if (!castRay(world, end ? origins[k] : o0, dw, model.max_range, end ? -1 : start_level, &hit)) {
         hit_range[ray] = -1.0;
         continue;
       }
