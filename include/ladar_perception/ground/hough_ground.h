@@ -52,6 +52,19 @@ struct HoughGroundParams {
   bool refine = true;
   int refine_iterations = 5;         // rounds of (inliers of the line, least-squares line)
 
+  // --- Beyond the thesis: the ground line bends beyond the fitted line's support (a hill
+  // rising or falling away ahead). From the farthest inlier ahead, each segment of
+  // segment_length continues the line with the slope (within max_bend of the previous one)
+  // that the most returns of that segment support; at least min_segment_inliers, else the line
+  // goes on straight. 0 segments: one straight line, as the thesis.
+  int bend_segments = 4;
+  float segment_length = 10.0f;      // [m]
+  float max_bend = 0.15f;            // [-] largest slope change from one segment to the next
+  int min_segment_inliers = 4;
+  // SlopeError (3.14) divides by |r|; returns closer than this along r use this distance, since
+  // the slope from the point under the sensor to a return right below it is all noise [m].
+  float slope_error_min_distance = 2.0f;
+
   // --- Obstacle probability (eqs 3.13-3.15). SlopeError is GndError / r here (see
   // houghSlopeError), so SlopeErrorMax sets how tall an obstacle must be at range r to score:
   // P > 0.5 needs at least |GndError| > 0.5 * SlopeErrorMax * r. The vertical SICK sees the
@@ -89,6 +102,21 @@ struct GroundLineFit {
   float rms = 0.f;          // RMS ErrorValue of the inliers [m]
   float r_min = 0.f;        // extent of the inliers along r [m]
   float r_max = 0.f;
+  // Bends beyond the line's support (bend_segments): segment k starts at bend_r[k] (ascending,
+  // ahead of the sensor) at ground height bend_h[k] and rises by bend_slope[k] per metre.
+  static constexpr int kMaxBends = 8;
+  int bends = 0;
+  float bend_r[kMaxBends] = {};
+  float bend_h[kMaxBends] = {};
+  float bend_slope[kMaxBends] = {};
+
+  // Height of the ground line at r (the fitted line, then the bends).
+  float heightAt(float r) const {
+    for (int k = bends - 1; k >= 0; --k) {
+      if (r > bend_r[k]) return bend_h[k] + bend_slope[k] * (r - bend_r[k]);
+    }
+    return ground + slope * r;
+  }
 };
 
 // The accumulator and the fit on (r, Height) pairs of one vertical scan. Keep one per stream:
@@ -115,6 +143,7 @@ class HoughLineFitter {
   // Window counts of votes_ (into counts_ when store) and their argmax cell.
   uint32_t argmax(bool store, int* best_j, int* best_c);
   void refine(const float* r, const float* height, int n, GroundLineFit* fit) const;
+  void bend(const float* r, const float* height, int n, GroundLineFit* fit);
 
   HoughGroundParams params_;
   int n_ground_ = 0, n_slope_ = 0, pad_ = 0, row_ = 0, stride_ = 0;
@@ -122,6 +151,7 @@ class HoughLineFitter {
   std::vector<int16_t> counts_;   // n_slope_ rows of n_ground_ window counts
   std::vector<int16_t> row_scratch_, row_max_;
   std::vector<float> fr_, fh_;    // the returns that vote (compacted)
+  std::vector<float> seg_d_, seg_e_;  // one bend segment's returns
 };
 
 // Eqs 3.13-3.15 for one return against a fitted line. SlopeError (3.14) is Slope_i - Slope*
@@ -129,11 +159,11 @@ class HoughLineFitter {
 // return, (Height_i - Ground*) / r_i, which makes SlopeError_i = GndError_i / |r_i| (the
 // thesis's 1-DOF Slope_i = Height_i / r_i is the case Ground* = 0).
 inline float houghGndError(const GroundLineFit& f, float r, float height) {
-  return height - f.ground - r * f.slope;  // eq 3.13
+  return height - f.heightAt(r);  // eq 3.13 (Height - Ground* - r Slope* before any bend)
 }
-inline float houghSlopeError(float gnd_error, float r) {
+inline float houghSlopeError(float gnd_error, float r, float min_distance = 0.05f) {
   const float ar = std::fabs(r);
-  return gnd_error / (ar > 0.05f ? ar : 0.05f);  // eq 3.14
+  return gnd_error / (ar > min_distance ? ar : min_distance);  // eq 3.14
 }
 
 // Labels and P(obstacle) of n (r, Height) pairs against a fit: obstacle when eq 3.15 exceeds
@@ -141,7 +171,7 @@ inline float houghSlopeError(float gnd_error, float r) {
 // unknown. labels and p_obstacle hold n values.
 void classifyAgainstLine(const GroundLineFit& fit, const float* r, const float* height, int n,
                          const ObstacleToleranceParams& tolerances, uint8_t* labels,
-                         float* p_obstacle);
+                         float* p_obstacle, float slope_error_min_distance = 0.05f);
 
 // The thesis's 1-DOF vertical scan fit (eqs 3.4-3.11, through the vertical scan method's own
 // vertical_scan::estimateSlope) applied to one 2D vertical scan: the line is pinned to the

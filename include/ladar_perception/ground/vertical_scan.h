@@ -46,11 +46,27 @@ struct VerticalScanParams {
   int coupling_radius = 2;                // columns on each side that are coupled
   int min_ground_returns = 3;             // fewer feasible returns: borrow from neighbours
   bool negative_obstacles = true;         // returns well below the ground line are obstacles
+  // GndErrorMax for returns BELOW the ground line (potholes, ditches) at r = 0 [m]; grows with
+  // r like tolerances.gnd_error_max_per_m. 0 = the same tolerance as above the line (thesis).
+  float negative_gnd_error_max = 0.f;
+  // Vertical surfaces (curb faces, the lower parts of cars and walls): a second obstacle
+  // probability from the local terrain slope |dHeight/dr| between a return and the
+  // representatives of the laser rows just below and above it in its column (the smaller of
+  // the two), combined with GndError as in eq 3.15. P = max(P_3.15, P_vertical).
+  bool vertical_surfaces = true;
+  float vertical_gnd_error_max = 0.06f;   // GndError at which P_vertical's first factor is 1 [m]
+  float vertical_slope_max = 1.0f;        // local slope at which its second factor is 1
 };
 
 // Settings by name: "thesis" (the thesis's method and settings) and "default" (beyond it).
 VerticalScanParams verticalScanThesisParams();
 VerticalScanParams verticalScanDefaultParams();
+
+// Sets one scalar parameter by its field name ("weight_bias", "tolerances.gnd_error_max_base",
+// "bend_ground_line" (0/1), ...): the tools' --set key=value. False with a reason for an unknown
+// key.
+bool setVerticalScanParam(VerticalScanParams* params, const std::string& key, double value,
+                          std::string* error);
 
 // The vertical scan method as a GroundModel with the given params (used by the nodelet, which
 // rebuilds the model when dynamic_reconfigure changes a parameter).
@@ -134,6 +150,29 @@ void fitBentLine(const float* r, const float* height, int n, const VerticalScanP
 
 }  // namespace vertical_scan
 
+// A growable array that does not initialise its elements (per-scan workspace: every element
+// is written before it is read, so zero-filling 124,000 points per scan would be wasted work).
+template <typename T>
+class ScratchBuffer {
+ public:
+  void resize(std::size_t n) {
+    if (n > capacity_) {
+      data_.reset(new T[n]);
+      capacity_ = n;
+    }
+    size_ = n;
+  }
+  std::size_t size() const { return size_; }
+  T* data() { return data_.get(); }
+  const T* data() const { return data_.get(); }
+  T& operator[](std::size_t i) { return data_[i]; }
+  const T& operator[](std::size_t i) const { return data_[i]; }
+
+ private:
+  std::unique_ptr<T[]> data_;
+  std::size_t size_ = 0, capacity_ = 0;
+};
+
 // The vertical scan ground model. Keep one instance per stream: its workspace buffers are
 // reused, so steady-state scans do not allocate.
 class VerticalScanGround : public GroundModel {
@@ -155,7 +194,9 @@ class VerticalScanGround : public GroundModel {
   int columnOf(float x, float y) const;
 
  private:
-  template <bool kRing, bool kTilted>
+  // Column (0..columns_-1) of a ground-frame direction, through the atan LUT.
+  float columnCoordinate(float x, float y) const;
+  template <bool kRing, bool kTilted, bool kFastXYZ>
   void binPoints(const PointCloudView& view, const SensorPose& pose, GroundClassification* out);
   void fitColumns();
   void labelPoints(GroundClassification* out);
@@ -164,22 +205,25 @@ class VerticalScanGround : public GroundModel {
   std::string name_;
   ElevationRowTable row_table_;
   int columns_ = 0;
-  int rows_ = 0;       // rows per column in the bin grid
+  int rows_ = 0;       // rows per column in the bin grid (a power of two)
+  int row_shift_ = 0;  // log2(rows_)
   int knots_ = 0;      // knots per column's ground line
   float inv_column_width_ = 0.f;  // columns per radian
   float inv_segment_ = 0.f;
 
   // Per-scan workspace, reused.
-  std::vector<float> r_;          // horizontal distance per input point (ground frame)
-  std::vector<float> height_;     // height per input point (ground frame)
-  std::vector<uint32_t> bin_;     // bin per input point, kInvalidBin for unknown
+  ScratchBuffer<float> r_;        // horizontal distance per input point (ground frame)
+  ScratchBuffer<float> height_;   // height per input point (ground frame)
+  ScratchBuffer<uint32_t> bin_;   // bin per input point, kInvalidBin for unknown
   std::vector<uint32_t> bin_start_;   // counting sort of points by bin
-  std::vector<uint32_t> order_;
-  std::vector<float> order_r_;
+  ScratchBuffer<uint32_t> order_;
+  ScratchBuffer<float> order_r_;
+  std::vector<float> atan_lut_;   // atan(t), t in [0, 1], in column units
   std::vector<float> col_r_, col_h_, col_w_;   // one column's representatives
   std::vector<float> knot_height_;             // columns_ x knots_
   std::vector<float> knot_support_;            // columns_ x knots_
   std::vector<float> coupled_;                 // columns_ x knots_
+  std::vector<float> rep_r_, rep_h_;           // bin representative (r < 0: empty bin)
   std::vector<float> column_slope_;            // straight estimate per column
   std::vector<int> column_support_;
   std::vector<int> column_count_;

@@ -20,6 +20,8 @@ HoughGroundParams houghGroundThesisParams() {
   HoughGroundParams p;
   p.tolerances = ObstacleToleranceParams();  // the vertical scan method's tolerances
   p.refine = false;  // the thesis takes the accumulator's argmax as the ground line
+  p.bend_segments = 0;  // one straight line
+  p.slope_error_min_distance = 0.05f;  // as the vertical scan method's Height / r
   return p;
 }
 
@@ -43,6 +45,11 @@ void HoughLineFitter::setParams(const HoughGroundParams& in) {
   if (!(p.min_fit_distance > 0.f)) p.min_fit_distance = 0.05f;
   if (!(p.max_fit_distance >= p.min_fit_distance)) p.max_fit_distance = p.min_fit_distance;
   p.min_inliers = std::max(p.min_inliers, 2);
+  p.bend_segments = std::min(std::max(p.bend_segments, 0), GroundLineFit::kMaxBends);
+  p.segment_length = positiveOr(p.segment_length, 10.f);
+  if (!(p.max_bend >= 0.f)) p.max_bend = 0.f;
+  p.min_segment_inliers = std::max(p.min_segment_inliers, 2);
+  p.slope_error_min_distance = positiveOr(p.slope_error_min_distance, 0.05f);
   p.refine_iterations = std::max(p.refine_iterations, 0);
   n_ground_ = std::min(kMaxCells, static_cast<int>(std::floor((p.ground_max - p.ground_min) /
                                                               p.ground_resolution + 1e-4f)) + 1);
@@ -199,7 +206,64 @@ GroundLineFit HoughLineFitter::fit(const float* r, const float* height, int n) {
   fit.margin = static_cast<float>(best - std::min(best, runner)) / static_cast<float>(best);
 
   refine(fr_.data(), fh_.data(), m, &fit);
+  if (fit.valid && p.bend_segments > 0) bend(r, height, n, &fit);
   return fit;
+}
+
+void HoughLineFitter::bend(const float* r, const float* height, int n, GroundLineFit* fit) {
+  const HoughGroundParams& p = params_;
+  const float tol = p.error_tolerance;
+  const float L = p.segment_length;
+  float r0 = fit->r_max;  // the line is supported up to its farthest inlier ahead
+  if (!(r0 > 0.f)) return;
+  float h0 = fit->ground + fit->slope * r0;
+  float s_prev = fit->slope;
+  const int candidates = static_cast<int>(std::floor(2.f * p.max_bend / p.slope_resolution)) + 1;
+  for (int k = 0; k < p.bend_segments; ++k) {
+    // The segment's returns relative to its start point.
+    seg_d_.clear();
+    seg_e_.clear();
+    for (int i = 0; i < n; ++i) {
+      const float d = r[i] - r0;
+      if (d > 1e-3f && d <= L && std::isfinite(height[i])) {  // NaN r fails the comparison
+        seg_d_.push_back(d);
+        seg_e_.push_back(height[i] - h0);
+      }
+    }
+    const int m = static_cast<int>(seg_d_.size());
+    if (m < p.min_segment_inliers) break;
+    // The slope through the start point that the most returns support (a 1-D accumulator);
+    // ties to the smallest bend.
+    int best = 0;
+    float best_s = s_prev;
+    for (int c = 0; c < candidates; ++c) {
+      const float s = s_prev - p.max_bend + static_cast<float>(c) * p.slope_resolution;
+      int count = 0;
+      for (int j = 0; j < m; ++j) count += std::fabs(seg_e_[j] - s * seg_d_[j]) < tol;
+      if (count > best || (count == best && std::fabs(s - s_prev) < std::fabs(best_s - s_prev))) {
+        best = count;
+        best_s = s;
+      }
+    }
+    if (best < p.min_segment_inliers) break;
+    // Least squares slope through the start point on the inliers.
+    double sde = 0, sdd = 0;
+    for (int j = 0; j < m; ++j) {
+      if (std::fabs(seg_e_[j] - best_s * seg_d_[j]) < tol) {
+        sde += static_cast<double>(seg_d_[j]) * seg_e_[j];
+        sdd += static_cast<double>(seg_d_[j]) * seg_d_[j];
+      }
+    }
+    float s = sdd > 0 ? static_cast<float>(sde / sdd) : best_s;
+    s = std::min(std::max(s, s_prev - p.max_bend), s_prev + p.max_bend);
+    fit->bend_r[k] = r0;
+    fit->bend_h[k] = h0;
+    fit->bend_slope[k] = s;
+    fit->bends = k + 1;
+    r0 += L;
+    h0 += s * L;
+    s_prev = s;
+  }
 }
 
 void HoughLineFitter::refine(const float* r, const float* height, int n, GroundLineFit* fit) const {
@@ -273,7 +337,7 @@ void HoughLineFitter::refine(const float* r, const float* height, int n, GroundL
 
 void classifyAgainstLine(const GroundLineFit& fit, const float* r, const float* height, int n,
                          const ObstacleToleranceParams& tolerances, uint8_t* labels,
-                         float* p_obstacle) {
+                         float* p_obstacle, float slope_error_min_distance) {
   for (int i = 0; i < n; ++i) {
     const float ri = r[i], hi = height[i];
     if (!fit.valid || !std::isfinite(ri) || !std::isfinite(hi)) {
@@ -282,7 +346,7 @@ void classifyAgainstLine(const GroundLineFit& fit, const float* r, const float* 
       continue;
     }
     const float gnd_error = houghGndError(fit, ri, hi);        // eq 3.13
-    const float slope_error = houghSlopeError(gnd_error, ri);  // eq 3.14
+    const float slope_error = houghSlopeError(gnd_error, ri, slope_error_min_distance);  // eq 3.14
     const float prob = obstacleProbability(gnd_error, slope_error, std::fabs(ri), tolerances);
     p_obstacle[i] = prob;
     labels[i] = prob > tolerances.obstacle_threshold ? kLabelObstacle : kLabelGround;
@@ -392,7 +456,8 @@ bool HoughGround::classify(const LaserScanView& scan, const SensorPose& pose,
   const int ni = static_cast<int>(n);
   out->fit = fitter_.fit(out->r.data(), out->height.data(), ni);
   classifyAgainstLine(out->fit, out->r.data(), out->height.data(), ni, params().tolerances,
-                      out->classification.labels.data(), out->classification.p_obstacle.data());
+                      out->classification.labels.data(), out->classification.p_obstacle.data(),
+                      params().slope_error_min_distance);
   return true;
 }
 
@@ -460,7 +525,7 @@ class HoughColumnsModel : public GroundModel {
       }
       const GroundLineFit fit = fitter_.fit(cr_.data(), ch_.data(), m);
       classifyAgainstLine(fit, cr_.data(), ch_.data(), m, params_.fit.tolerances, cl_.data(),
-                          cp_.data());
+                          cp_.data(), fitter_.params().slope_error_min_distance);
       for (int k = 0; k < m; ++k) {
         out->labels[order_[b + k]] = cl_[k];
         out->p_obstacle[order_[b + k]] = cp_[k];

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 
 #include "ladar_perception/cloud/laser_elevations.h"
@@ -15,23 +16,7 @@ constexpr uint32_t kInvalidBin = std::numeric_limits<uint32_t>::max();
 constexpr float kPi = 3.14159265358979f;
 constexpr int kMaxRingRows = 128;   // rows of the bin grid when the cloud carries `ring`
 constexpr float kMinR = 0.05f;      // horizontal distance floor for Height / r [m]
-
-// atan2 with a 6-term odd minimax polynomial on [0, 1] (|error| < 2e-5 rad, far below a
-// 1.5 deg column); a handful of instructions instead of a libm call per point.
-inline float fastAtan2(float y, float x) {
-  const float ax = std::fabs(x);
-  const float ay = std::fabs(y);
-  const float mx = ax > ay ? ax : ay;
-  const float mn = ax > ay ? ay : ax;
-  const float t = mx > 0.f ? mn / mx : 0.f;
-  const float s = t * t;
-  float a = t * (0.99997726f +
-                 s * (-0.33262347f +
-                      s * (0.19354346f + s * (-0.11643287f + s * (0.05265332f - s * 0.01172120f)))));
-  if (ay > ax) a = 0.5f * kPi - a;
-  if (x < 0.f) a = kPi - a;
-  return y < 0.f ? -a : a;
-}
+constexpr int kAtanCells = 2048;    // atan LUT cells on [0, 1]: < 0.015 deg error
 
 // Sorts keys ascending and permutes vals alike (small, nearly sorted arrays).
 template <typename V>
@@ -67,6 +52,8 @@ VerticalScanParams verticalScanThesisParams() {
   p.couple_columns = false;
   // Eq 3.15 as the thesis writes it takes |GndError|: returns below the line score too.
   p.negative_obstacles = true;
+  p.negative_gnd_error_max = 0.f;
+  p.vertical_surfaces = false;
   return p;
 }
 
@@ -260,6 +247,10 @@ void VerticalScanGround::setParams(const VerticalScanParams& params) {
   columns_ = std::max(1, static_cast<int>(std::lround(360.0 / p.column_width_deg)));
   inv_column_width_ = static_cast<float>(columns_) / (2.f * kPi);
   inv_segment_ = 1.f / p.segment_length;
+  atan_lut_.resize(kAtanCells + 2);
+  for (int i = 0; i <= kAtanCells + 1; ++i) {
+    atan_lut_[i] = std::atan(static_cast<float>(i) / kAtanCells) * inv_column_width_;
+  }
   if (p.bend_ground_line) {
     knots_ = static_cast<int>(std::ceil(p.max_range / p.segment_length)) + 2;
   } else {
@@ -272,9 +263,25 @@ void VerticalScanGround::setParams(const VerticalScanParams& params) {
   column_support_.assign(columns_, 0);
 }
 
+inline float VerticalScanGround::columnCoordinate(float x, float y) const {
+  // atan2(y, x) + pi in column units: octant reduction, then the LUT on min/max in [0, 1].
+  const float ax = std::fabs(x), ay = std::fabs(y);
+  const bool steep = ay > ax;
+  const float mx = steep ? ay : ax;
+  const float mn = steep ? ax : ay;
+  const float t = mx > 0.f ? mn / mx : 0.f;
+  const float quarter = 0.25f * static_cast<float>(columns_);
+  float a = atan_lut_[static_cast<int>(t * kAtanCells + 0.5f)];
+  if (steep) a = quarter - a;
+  if (x < 0.f) a = 2.f * quarter - a;
+  if (y < 0.f) a = -a;
+  a += 2.f * quarter;
+  const float max_c = static_cast<float>(columns_) - 0.5f;
+  return a < max_c ? a : max_c;
+}
+
 int VerticalScanGround::columnOf(float x, float y) const {
-  int c = static_cast<int>((fastAtan2(y, x) + kPi) * inv_column_width_);
-  return c >= columns_ ? columns_ - 1 : (c < 0 ? 0 : c);
+  return static_cast<int>(columnCoordinate(x, y));
 }
 
 float VerticalScanGround::groundHeight(int col, float r) const {
@@ -283,7 +290,7 @@ float VerticalScanGround::groundHeight(int col, float r) const {
   return line.heightAt(r);
 }
 
-template <bool kRing, bool kTilted>
+template <bool kRing, bool kTilted, bool kFastXYZ>
 void VerticalScanGround::binPoints(const PointCloudView& view, const SensorPose& pose,
                                    GroundClassification* out) {
   const std::size_t n = view.size();
@@ -292,43 +299,80 @@ void VerticalScanGround::binPoints(const PointCloudView& view, const SensorPose&
   const Eigen::Matrix3f R = pose.sensor_to_ground.linear();
   const Eigen::Vector3f t = pose.sensor_to_ground.translation();
   const int rows = rows_;
-  const float cols_f = static_cast<float>(columns_);
-  uint32_t* count = bin_start_.data() + 1;
+  const ElevationRowTable row_table = row_table_;  // a local copy: no reloads after stores
+  const float* __restrict atan_lut = atan_lut_.data();
+  const float quarter = 0.25f * static_cast<float>(columns_);
+  const float max_c = static_cast<float>(columns_) - 0.5f;
+  const int shift = row_shift_;
+  uint32_t* __restrict count = bin_start_.data() + 1;
+  uint32_t* __restrict bins = bin_.data();
+  float* __restrict rr = r_.data();
+  float* __restrict hh = height_.data();
+  uint8_t* __restrict labels = out->labels.data();
+  float* __restrict prob = out->p_obstacle.data();
+  uint32_t x_off = 0, y_off = 0, z_off = 0;
+  if (kFastXYZ) {
+    const CloudLayout& L = view.layout();
+    x_off = findField(L, "x")->offset;
+    y_off = findField(L, "y")->offset;
+    z_off = findField(L, "z")->offset;
+  }
+  const uint8_t* base = kFastXYZ ? view.pointData(0) : nullptr;
+  const std::size_t step = view.layout().point_step;
   for (std::size_t i = 0; i < n; ++i) {
-    const Eigen::Vector3f ps = view.xyz(i);
-    const float xs = ps.x(), ys = ps.y(), zs = ps.z();
+    float xs, ys, zs;
+    if (kFastXYZ) {
+      const uint8_t* pt = base + i * step;
+      std::memcpy(&xs, pt + x_off, 4);
+      std::memcpy(&ys, pt + y_off, 4);
+      std::memcpy(&zs, pt + z_off, 4);
+    } else {
+      const Eigen::Vector3f ps = view.xyz(i);
+      xs = ps.x(); ys = ps.y(); zs = ps.z();
+    }
     const float rs2 = xs * xs + ys * ys;
     const float d2 = rs2 + zs * zs;
     // NaN compares false: NaN/Inf and out-of-range returns are unknown.
     if (!(d2 >= min_r2 && d2 <= max_r2)) {
-      bin_[i] = kInvalidBin;
-      out->labels[i] = kLabelUnknown;
-      out->p_obstacle[i] = 0.f;
+      bins[i] = kInvalidBin;
+      labels[i] = kLabelUnknown;
+      prob[i] = 0.f;
       continue;
     }
     float gx, gy, gz, r;
     const float rs = std::sqrt(rs2);
     if (kTilted) {
-      const Eigen::Vector3f g = R * ps + t;
+      const Eigen::Vector3f g = R * Eigen::Vector3f(xs, ys, zs) + t;
       gx = g.x(); gy = g.y(); gz = g.z();
       r = std::sqrt(gx * gx + gy * gy);
     } else {
-      gx = xs + t.x(); gy = ys + t.y(); gz = zs + t.z();
-      r = (t.x() == 0.f && t.y() == 0.f) ? rs : std::sqrt(gx * gx + gy * gy);
+      // Untilted and straight above the ground origin (classify() routes any other pose to
+      // the tilted path): the horizontal distance is the sensor's.
+      gx = xs; gy = ys; gz = zs + t.z();
+      r = rs;
     }
     int row;
     if (kRing) {
       row = view.ring(i);
       row = row < 0 ? 0 : (row >= rows ? rows - 1 : row);
     } else {
-      row = row_table_.row(zs, rs > kMinR ? rs : kMinR);
+      row = row_table.row(zs, rs > kMinR ? rs : kMinR);
     }
-    float cf = (fastAtan2(gy, gx) + kPi) * inv_column_width_;
-    cf = cf < cols_f ? cf : cols_f - 1.f;
-    const uint32_t bin = static_cast<uint32_t>(cf) * rows + row;
-    bin_[i] = bin;
-    r_[i] = r > kMinR ? r : kMinR;
-    height_[i] = gz;
+    // Column: atan2(gy, gx) + pi in column units (octant reduction and the atan LUT).
+    const float ax = std::fabs(gx), ay = std::fabs(gy);
+    const bool steep = ay > ax;
+    const float mx = steep ? ay : ax;
+    const float mn = steep ? ax : ay;
+    float a = atan_lut[static_cast<int>(mn / mx * kAtanCells + 0.5f)];  // mx > 0: r >= kMinR
+    a = steep ? quarter - a : a;
+    a = gx < 0.f ? 2.f * quarter - a : a;
+    a = gy < 0.f ? -a : a;
+    a += 2.f * quarter;
+    a = a < max_c ? a : max_c;
+    const uint32_t bin = (static_cast<uint32_t>(a) << shift) + row;
+    bins[i] = bin;
+    rr[i] = r > kMinR ? r : kMinR;
+    hh[i] = gz;
     ++count[bin];
   }
 }
@@ -338,7 +382,10 @@ void VerticalScanGround::classify(const PointCloudView& view, const SensorPose& 
   const std::size_t n = view.size();
   out->resize(n);
   const bool ring = view.hasRing();
-  rows_ = ring ? kMaxRingRows : std::max(1, row_table_.rows());
+  const int wanted_rows = ring ? kMaxRingRows : std::max(1, row_table_.rows());
+  row_shift_ = 0;
+  while ((1 << row_shift_) < wanted_rows) ++row_shift_;
+  rows_ = 1 << row_shift_;
   const std::size_t bins = static_cast<std::size_t>(columns_) * rows_;
   r_.resize(n);
   height_.resize(n);
@@ -349,13 +396,22 @@ void VerticalScanGround::classify(const PointCloudView& view, const SensorPose& 
   if (n == 0) return;
 
   const Eigen::Matrix3f R = pose.sensor_to_ground.linear();
-  const bool tilted = !R.isIdentity(1e-6f);
-  if (ring) {
-    if (tilted) binPoints<true, true>(view, pose, out);
-    else binPoints<true, false>(view, pose, out);
+  const Eigen::Vector3f t = pose.sensor_to_ground.translation();
+  const bool tilted = !R.isIdentity(1e-6f) || t.x() != 0.f || t.y() != 0.f;
+  const bool fast = view.packedFloatXYZ() &&
+                    (view.height() <= 1 || view.layout().row_step == view.width() * view.layout().point_step);
+  if (ring && fast) {
+    if (tilted) binPoints<true, true, true>(view, pose, out);
+    else binPoints<true, false, true>(view, pose, out);
+  } else if (ring) {
+    if (tilted) binPoints<true, true, false>(view, pose, out);
+    else binPoints<true, false, false>(view, pose, out);
+  } else if (fast) {
+    if (tilted) binPoints<false, true, true>(view, pose, out);
+    else binPoints<false, false, true>(view, pose, out);
   } else {
-    if (tilted) binPoints<false, true>(view, pose, out);
-    else binPoints<false, false>(view, pose, out);
+    if (tilted) binPoints<false, true, false>(view, pose, out);
+    else binPoints<false, false, false>(view, pose, out);
   }
 
   // Counting sort of the valid points by bin (3.3 step 1).
@@ -391,6 +447,8 @@ void VerticalScanGround::fitColumns() {
   col_r_.resize(static_cast<std::size_t>(columns_) * rows);
   col_h_.resize(col_r_.size());
   col_w_.resize(std::max<std::size_t>(rows, 1));
+  rep_r_.assign(static_cast<std::size_t>(columns_) * rows, -1.f);
+  rep_h_.resize(rep_r_.size());
   std::vector<int>& col_n = column_support_;
   std::vector<int>& col_count = column_count_;
   col_count.assign(columns_, 0);
@@ -424,6 +482,8 @@ void VerticalScanGround::fitColumns() {
       }
       cr[m] = r_[rep];
       ch[m] = height_[rep];
+      rep_r_[b] = r_[rep];
+      rep_h_[b] = height_[rep];
       ++m;
     }
     insertionSort(cr, ch, m);
@@ -502,27 +562,116 @@ void VerticalScanGround::labelPoints(GroundClassification* out) {
   const ObstacleToleranceParams& tol = p.tolerances;
   const std::size_t n = bin_.size();
   const uint32_t rows = static_cast<uint32_t>(rows_);
+  const int shift = row_shift_;
   const int K = knots_;
+  const int last_k = K - 2;
   const float inv_seg = inv_segment_;
   const float thr = tol.obstacle_threshold;
   const bool negative = p.negative_obstacles;
-  uint8_t* labels = out->labels.data();
-  float* prob = out->p_obstacle.data();
+  const bool vertical = p.vertical_surfaces;
+  const float inv_v_gnd = 1.f / std::max(p.vertical_gnd_error_max, 1e-4f);
+  const float inv_v_slope = 1.f / std::max(p.vertical_slope_max, 1e-4f);
+  // Eq 3.15's range-growing tolerances; GndErrorMax may differ below the line.
+  const float g_above = tol.gnd_error_max_base;
+  const float g_below = p.negative_gnd_error_max > 0.f ? p.negative_gnd_error_max : g_above;
+  const float g_per_m = tol.gnd_error_max_per_m;
+  const float s_base = tol.slope_error_max_base;
+  const float s_per_m = tol.slope_error_max_per_m;
+  const float* __restrict rep_r = rep_r_.data();
+  const float* __restrict rep_h = rep_h_.data();
+  const float* __restrict knots = knot_height_.data();
+  const uint32_t* __restrict bins = bin_.data();
+  const float* __restrict rr = r_.data();
+  const float* __restrict hh = height_.data();
+  uint8_t* __restrict labels = out->labels.data();
+  float* __restrict prob = out->p_obstacle.data();
   for (std::size_t i = 0; i < n; ++i) {
-    const uint32_t b = bin_[i];
+    const uint32_t b = bins[i];
     if (b == kInvalidBin) continue;
-    const float* kh = &knot_height_[static_cast<std::size_t>(b / rows) * K];
-    const float r = r_[i];
-    const vertical_scan::GroundLine line{kh, K, inv_seg};
-    // Eq 3.10 (GndError = ground line height - Height; SlopeEstimate * r for the thesis line)
-    // and eq 3.11 (SlopeError = SlopeEstimate - Slope_i = GndError / r).
-    float gnd_error = line.heightAt(r) - height_[i];
+    const uint32_t col = b >> shift;
+    const float* kh = knots + static_cast<std::size_t>(col) * K;
+    const float r = rr[i];
+    const float h = hh[i];
+    // The column's ground line at r (vertical_scan::GroundLine::heightAt, inlined).
+    const float f = r * inv_seg;
+    int k = static_cast<int>(f);
+    k = k < last_k ? k : last_k;
+    const float ground = kh[k] + (kh[k + 1] - kh[k]) * (f - static_cast<float>(k));
+    // Eq 3.10: GndError = ground line height - Height (SlopeEstimate * r - Height for the
+    // thesis line); eq 3.11: SlopeError = SlopeEstimate - Height / r = GndError / r.
+    float gnd_error = ground - h;
     if (!negative && gnd_error > 0.f) gnd_error = 0.f;  // below the line counts as ground
-    const float slope_error = gnd_error / r;
-    const float prob_i = obstacleProbability(gnd_error, slope_error, r, tol);  // eq 3.15
+    const float abs_error = std::fabs(gnd_error);
+    // Eq 3.15: P = min(|GndError|, GndErrorMax)/GndErrorMax * min(|SlopeError|, SlopeErrorMax)/SlopeErrorMax.
+    const float g_max = (gnd_error > 0.f ? g_below : g_above) + g_per_m * r;
+    const float s_max = s_base + s_per_m * r;
+    float gt = abs_error / g_max;
+    gt = gt < 1.f ? gt : 1.f;
+    float st = abs_error / (r * s_max);
+    st = st < 1.f ? st : 1.f;
+    float prob_i = gt * st;
+    if (vertical && gnd_error < 0.f) {
+      // P_vertical = GndError factor * local slope factor; only evaluated where it can reach
+      // the threshold (its GndError factor exceeds it), 0 elsewhere.
+      float g = -gnd_error * inv_v_gnd;
+      g = g < 1.f ? g : 1.f;
+      if (g > thr && g > prob_i) {
+        const uint32_t row = b & (rows - 1);
+        float local = -1.f;
+        if (row > 0 && rep_r[b - 1] >= 0.f) {
+          local = std::fabs(h - rep_h[b - 1]) / (std::fabs(r - rep_r[b - 1]) + 0.02f);
+        }
+        if (row + 1 < rows && rep_r[b + 1] >= 0.f) {
+          const float sl = std::fabs(h - rep_h[b + 1]) / (std::fabs(r - rep_r[b + 1]) + 0.02f);
+          local = local < 0.f ? sl : (sl < local ? sl : local);
+        }
+        float v = local * inv_v_slope;
+        v = v < 1.f ? v : 1.f;
+        const float pv = g * v;
+        prob_i = pv > prob_i ? pv : prob_i;
+      }
+    }
     prob[i] = prob_i;
     labels[i] = prob_i > thr ? kLabelObstacle : kLabelGround;
   }
+}
+
+bool setVerticalScanParam(VerticalScanParams* p, const std::string& key, double value,
+                          std::string* error) {
+  const float f = static_cast<float>(value);
+  ObstacleToleranceParams& t = p->tolerances;
+  struct FloatField { const char* name; float* field; };
+  const FloatField floats[] = {
+      {"column_width_deg", &p->column_width_deg},
+      {"min_range", &p->min_range},
+      {"max_range", &p->max_range},
+      {"ground_slope_min", &p->ground_slope_min},
+      {"ground_slope_max", &p->ground_slope_max},
+      {"weight_bias", &p->weight_bias},
+      {"tolerances.gnd_error_max_base", &t.gnd_error_max_base},
+      {"tolerances.gnd_error_max_per_m", &t.gnd_error_max_per_m},
+      {"tolerances.slope_error_max_base", &t.slope_error_max_base},
+      {"tolerances.slope_error_max_per_m", &t.slope_error_max_per_m},
+      {"tolerances.obstacle_threshold", &t.obstacle_threshold},
+      {"segment_length", &p->segment_length},
+      {"max_bend", &p->max_bend},
+      {"segment_gate", &p->segment_gate},
+      {"negative_gnd_error_max", &p->negative_gnd_error_max},
+      {"vertical_gnd_error_max", &p->vertical_gnd_error_max},
+      {"vertical_slope_max", &p->vertical_slope_max},
+  };
+  for (const FloatField& ff : floats) {
+    if (key == ff.name) { *ff.field = f; return true; }
+  }
+  if (key == "iterations") { p->iterations = static_cast<int>(value); return true; }
+  if (key == "coupling_radius") { p->coupling_radius = static_cast<int>(value); return true; }
+  if (key == "min_ground_returns") { p->min_ground_returns = static_cast<int>(value); return true; }
+  if (key == "bend_ground_line") { p->bend_ground_line = value != 0.0; return true; }
+  if (key == "couple_columns") { p->couple_columns = value != 0.0; return true; }
+  if (key == "negative_obstacles") { p->negative_obstacles = value != 0.0; return true; }
+  if (key == "vertical_surfaces") { p->vertical_surfaces = value != 0.0; return true; }
+  if (error) *error = "unknown vertical scan parameter '" + key + "'";
+  return false;
 }
 
 std::unique_ptr<GroundModel> makeVerticalScanModel(const VerticalScanParams& params) {

@@ -1,0 +1,97 @@
+// Accuracy of a ground model on the simulator's standard worlds with ground truth (the
+// accuracy test and the ground_eval tool share this one evaluation). Header-only so the ground
+// library itself does not depend on the simulator.
+//
+// Truth mapping: sim ground classes (road, sidewalk, terrain) = ground; obstacle classes
+// (curb face, car, wall, pole, person, pothole) = obstacle.
+//   ground precision = true ground among points labelled ground;
+//   ground recall    = labelled ground among true ground;
+//   obstacle recall  = labelled obstacle among true obstacles (unknown counts as a miss).
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <string>
+
+#include <Eigen/Geometry>
+
+#include "ladar_perception/ground/ground_model.h"
+#include "ladar_perception/sim/scan_simulator.h"
+#include "ladar_perception/sim/sensor_models.h"
+#include "ladar_perception/sim/world.h"
+
+namespace ladar_perception {
+
+struct GroundAccuracy {
+  std::size_t scans = 0;
+  std::size_t points = 0;
+  std::size_t truth_ground = 0, truth_obstacle = 0;
+  std::size_t labelled_ground = 0;
+  std::size_t ground_as_ground = 0;      // true ground labelled ground
+  std::size_t obstacle_as_obstacle = 0;  // true obstacle labelled obstacle
+  // Per truth class: points and points labelled correctly.
+  std::array<std::size_t, sim::kNumSurfaceClasses> class_points{};
+  std::array<std::size_t, sim::kNumSurfaceClasses> class_correct{};
+
+  static double ratio(std::size_t a, std::size_t b) {
+    return b ? static_cast<double>(a) / static_cast<double>(b) : 1.0;
+  }
+  double groundPrecision() const { return ratio(ground_as_ground, labelled_ground); }
+  double groundRecall() const { return ratio(ground_as_ground, truth_ground); }
+  double obstacleRecall() const { return ratio(obstacle_as_obstacle, truth_obstacle); }
+
+  void add(const std::vector<uint8_t>& truth, const GroundClassification& result) {
+    ++scans;
+    for (std::size_t i = 0; i < truth.size() && i < result.size(); ++i) {
+      const auto c = static_cast<sim::SurfaceClass>(truth[i]);
+      const uint8_t label = result.labels[i];
+      const bool g = sim::isGroundClass(c), o = sim::isObstacleClass(c);
+      ++points;
+      truth_ground += g;
+      truth_obstacle += o;
+      labelled_ground += label == kLabelGround;
+      ground_as_ground += g && label == kLabelGround;
+      obstacle_as_obstacle += o && label == kLabelObstacle;
+      if (truth[i] < sim::kNumSurfaceClasses) {
+        ++class_points[truth[i]];
+        class_correct[truth[i]] += (g && label == kLabelGround) || (o && label == kLabelObstacle);
+      }
+    }
+  }
+};
+
+// The sensor mount of the evaluation: an HDL-64E 1.73 m above base_link, level (KITTI's).
+inline Eigen::Isometry3d evaluationSensorMount() {
+  Eigen::Isometry3d m = Eigen::Isometry3d::Identity();
+  m.translation() = Eigen::Vector3d(0.0, 0.0, 1.73);
+  return m;
+}
+
+// Classifies `scans` revolutions taken along the world's standard drive (evenly spaced in
+// time) and accumulates the accuracy. The model sees the sensor pose relative to base_link
+// (what tf gives the nodelet: base_link follows the local ground).
+inline bool evaluateGroundModel(const std::string& world_name, GroundModel* model,
+                                sim::NoiseProfile noise, int scans, uint32_t seed,
+                                GroundAccuracy* acc, std::string* error) {
+  sim::World world;
+  if (!sim::makeStandardWorld(world_name, seed, &world, error)) return false;
+  const sim::VelodyneModel velodyne = sim::VelodyneModel::hdl64e(noise);
+  const Eigen::Isometry3d mount = evaluationSensorMount();
+  SensorPose pose;
+  pose.sensor_to_ground = mount.cast<float>();
+  sim::SimulatedScan scan;
+  GroundClassification result;
+  PointCloudView view;
+  const double duration = world.driveDuration();
+  for (int k = 0; k < scans; ++k) {
+    const double t = duration * (static_cast<double>(k) + 0.5) / std::max(scans, 1);
+    const Eigen::Isometry3d sensor = world.drivePose(t) * mount;
+    sim::simulateVelodyneRevolution(world, sensor, velodyne, seed * 1000u + k, &scan);
+    if (!scan.cloud.view(&view, error)) return false;
+    model->classify(view, pose, &result);
+    acc->add(scan.truth, result);
+  }
+  return true;
+}
+
+}  // namespace ladar_perception

@@ -1,0 +1,113 @@
+// ground_eval: accuracy of the ground models on the simulator's worlds with ground truth,
+// printed as a Markdown table (with the command line that produced it).
+//
+//   ground_eval [--worlds flat,urban,hillside,potholes] [--method NAME[,NAME]]
+//               [--noise datasheet|table4.1|none] [--scans N] [--seed S] [--classes]
+#include <cstdio>
+#include <cstdlib>
+#include <iostream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "ladar_perception/ground/ground_evaluation.h"
+#include "ladar_perception/ground/vertical_scan.h"
+
+using namespace ladar_perception;
+
+namespace {
+std::vector<std::string> split(const std::string& s) {
+  std::vector<std::string> out;
+  std::stringstream ss(s);
+  std::string item;
+  while (std::getline(ss, item, ',')) if (!item.empty()) out.push_back(item);
+  return out;
+}
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::vector<std::string> worlds = {"flat", "urban", "hillside", "potholes"};
+  std::vector<std::string> methods = {groundModelNames().front()};
+  std::string noise_name = "datasheet";
+  int scans = 10;
+  uint32_t seed = 1;
+  bool per_class = false;
+  std::vector<std::string> sets;  // key=value overrides of the vertical scan params
+  std::string cmdline = "ground_eval";
+  for (int i = 1; i < argc; ++i) cmdline += std::string(" ") + argv[i];
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    auto next = [&]() -> std::string {
+      if (i + 1 >= argc) { std::cerr << "ground_eval: " << a << " needs a value\n"; std::exit(2); }
+      return argv[++i];
+    };
+    if (a == "--worlds") worlds = split(next());
+    else if (a == "--method") methods = split(next());
+    else if (a == "--noise") noise_name = next();
+    else if (a == "--scans") scans = std::atoi(next().c_str());
+    else if (a == "--seed") seed = static_cast<uint32_t>(std::strtoul(next().c_str(), nullptr, 10));
+    else if (a == "--classes") per_class = true;
+    else if (a == "--set") sets.push_back(next());
+    else {
+      std::cerr << "usage: ground_eval [--worlds a,b] [--method m1,m2] "
+                   "[--noise datasheet|table4.1|none] [--scans N] [--seed S] [--classes] [--set key=value]...\n";
+      return a == "-h" || a == "--help" ? 0 : 2;
+    }
+  }
+  sim::NoiseProfile noise;
+  if (!sim::noiseProfileFromName(noise_name, &noise)) {
+    std::cerr << "ground_eval: unknown noise profile " << noise_name << "\n";
+    return 2;
+  }
+  if (scans < 1) { std::cerr << "ground_eval: --scans must be >= 1\n"; return 2; }
+  std::printf("`%s`\n\n", cmdline.c_str());
+  std::printf("| world | method | noise | scans | points | ground precision | ground recall | obstacle recall |");
+  if (per_class) {
+    for (int c = 0; c < sim::kNumSurfaceClasses; ++c)
+      std::printf(" %s |", sim::className(static_cast<sim::SurfaceClass>(c)));
+  }
+  std::printf("\n|---|---|---|---|---|---|---|---|");
+  if (per_class) for (int c = 0; c < sim::kNumSurfaceClasses; ++c) std::printf("---|");
+  std::printf("\n");
+  int status = 0;
+  for (const std::string& m : methods) {
+    std::string error;
+    std::unique_ptr<GroundModel> model = makeGroundModel(m, &error);
+    if (!model) { std::cerr << "ground_eval: " << error << "\n"; return 2; }
+    if (!sets.empty()) {
+      auto* vs = dynamic_cast<VerticalScanGround*>(model.get());
+      if (!vs) { std::cerr << "ground_eval: --set applies to vertical scan models only\n"; return 2; }
+      VerticalScanParams params = vs->params();
+      for (const std::string& kv : sets) {
+        const std::size_t eq = kv.find('=');
+        if (eq == std::string::npos ||
+            !setVerticalScanParam(&params, kv.substr(0, eq), std::atof(kv.c_str() + eq + 1), &error)) {
+          std::cerr << "ground_eval: bad --set " << kv << " " << error << "\n";
+          return 2;
+        }
+      }
+      vs->setParams(params);
+    }
+    for (const std::string& w : worlds) {
+      GroundAccuracy acc;
+      if (!evaluateGroundModel(w, model.get(), noise, scans, seed, &acc, &error)) {
+        std::cerr << "ground_eval: " << w << ": " << error << "\n";
+        status = 1;
+        continue;
+      }
+      std::printf("| %s | %s | %s | %zu | %zu | %.2f%% | %.2f%% | %.2f%% |", w.c_str(),
+                  model->name().c_str(), noise_name.c_str(), acc.scans, acc.points,
+                  100.0 * acc.groundPrecision(), 100.0 * acc.groundRecall(),
+                  100.0 * acc.obstacleRecall());
+      if (per_class) {
+        for (int c = 0; c < sim::kNumSurfaceClasses; ++c) {
+          if (acc.class_points[c]) std::printf(" %.1f%% of %zu |", 100.0 * GroundAccuracy::ratio(acc.class_correct[c], acc.class_points[c]), acc.class_points[c]);
+          else std::printf(" - |");
+        }
+      }
+      std::printf("\n");
+      std::fflush(stdout);
+    }
+  }
+  return status;
+}
