@@ -121,3 +121,8 @@ TEST(PointCloudView, EmptyCloudIsValid) {
   ASSERT_TRUE(c.view(&v));
   EXPECT_TRUE(v.empty());
 }
+
+int main(int argc, char** argv) {
+  testing::InitGoogleTest(&argc, argv);
+  return RUN_ALL_TESTS();
+}
