@@ -27,6 +27,11 @@ HoughGroundParams toHoughGroundParams(const HoughGroundConfig& c) {
   p.min_inliers = c.min_inliers;
   p.refine = c.refine;
   p.refine_iterations = c.refine_iterations;
+  p.bend_segments = c.bend_segments;
+  p.segment_length = static_cast<float>(c.segment_length);
+  p.max_bend = static_cast<float>(c.max_bend);
+  p.min_segment_inliers = c.min_segment_inliers;
+  p.slope_error_min_distance = static_cast<float>(c.slope_error_min_distance);
   p.tolerances.gnd_error_max_base = static_cast<float>(c.gnd_error_max_base);
   p.tolerances.gnd_error_max_per_m = static_cast<float>(c.gnd_error_max_per_m);
   p.tolerances.slope_error_max_base = static_cast<float>(c.slope_error_max_base);
@@ -49,6 +54,11 @@ void loadHoughMethodSettings(const std::string& method, HoughGroundConfig* c) {
   c->min_inliers = p.min_inliers;
   c->refine = p.refine;
   c->refine_iterations = p.refine_iterations;
+  c->bend_segments = p.bend_segments;
+  c->segment_length = p.segment_length;
+  c->max_bend = p.max_bend;
+  c->min_segment_inliers = p.min_segment_inliers;
+  c->slope_error_min_distance = p.slope_error_min_distance;
   c->gnd_error_max_base = p.tolerances.gnd_error_max_base;
   c->gnd_error_max_per_m = p.tolerances.gnd_error_max_per_m;
   c->slope_error_max_base = p.tolerances.slope_error_max_base;

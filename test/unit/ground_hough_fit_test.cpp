@@ -184,6 +184,40 @@ TEST(HoughGroundFit, BeatsTheOneDofFitWhenTheGroundIsOffset) {
   EXPECT_GT(one_dof_wrong, 10);
 }
 
+// Beyond the thesis: a hill rising away ahead (flat to 12 m, then 12% and 24%). The straight
+// line fits the near ground; the bends follow the hill, so its returns stay ground, while a car
+// standing on the hill is still an obstacle.
+TEST(HoughGroundFit, BendsFollowAHillRisingAhead) {
+  VerticalScene scene;
+  scene.sensor_height = 1.7;
+  scene.segments.push_back({{-200.0, 0.0}, {12.0, 0.0}, 0});
+  scene.segments.push_back({{12.0, 0.0}, {22.0, 1.2}, 0});
+  scene.segments.push_back({{22.0, 1.2}, {200.0, 1.2 + 0.24 * 178.0}, 0});
+  scene.addBox(30.0, 34.5, 1.2 + 0.24 * 8.0, 1.5);
+  const Labelled bent = fitScene(scene);
+  lp::HoughGroundParams straight_params;
+  straight_params.bend_segments = 0;
+  const Labelled straight = fitScene(scene, straight_params);
+  ASSERT_TRUE(bent.fit.valid);
+  EXPECT_GE(bent.fit.bends, 2);
+  EXPECT_NEAR(bent.fit.ground, 0.0, 1e-3);
+  EXPECT_NEAR(bent.fit.slope, 0.0, 1e-4);
+  int bent_wrong = 0, straight_wrong = 0, car = 0;
+  for (std::size_t i = 0; i < bent.r.size(); ++i) {
+    if (bent.truth[i] == 0) {
+      bent_wrong += bent.labels[i] != lp::kLabelGround;
+      straight_wrong += straight.labels[i] != lp::kLabelGround;
+    } else if (bent.truth[i] == 1 && bent.h[i] > 1.2 + 0.24 * (bent.r[i] - 22.0) + 0.8) {
+      // (eq 3.15 with SlopeErrorMax 0.05 needs GndError > 0.75 m at 30 m)
+      EXPECT_EQ(bent.labels[i], lp::kLabelObstacle) << "r " << bent.r[i] << " h " << bent.h[i];
+      ++car;
+    }
+  }
+  EXPECT_EQ(bent_wrong, 0);
+  EXPECT_GT(straight_wrong, 5);
+  EXPECT_GE(car, 3);
+}
+
 TEST(HoughGroundFit, ConfidenceSeesACompetingLine) {
   // One clear ground line: the best different line has few votes.
   VerticalScene clear;
