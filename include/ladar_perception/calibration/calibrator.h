@@ -27,10 +27,13 @@ struct CalibrationInput {
 };
 
 enum class Metric {
-  kClosestPoint,   // trimmed closest point (eq 4.1) between the feature sets (Algorithm 4)
-  kAverageHeight,  // average height in grid (4.5.2)
+  kAuto,              // features for dense (3D) targets, points for sparse (2D) ones
+  kClosestPoint,      // trimmed closest point (eq 4.1) between the feature sets (Algorithm 4)
+  kClosestPointRaw,   // trimmed closest point (eq 4.1) of every (thinned) target point to the
+                      // reference cloud: a 2D ladar's few lines give too few, too biased features
+  kAverageHeight,     // average height in grid (4.5.2)
 };
-// "closest_point", "average_height"; false when unknown.
+// "auto", "closest_point", "closest_point_raw", "average_height"; false when unknown.
 bool parseMetric(const std::string& name, Metric* metric);
 
 struct CalibrationParams {
@@ -39,7 +42,17 @@ struct CalibrationParams {
   Pose6 initial = Pose6::Zero();  // base_link -> target sensor, the initial guess
   Pose6 spread = (Pose6() << 1.0, 1.0, 1.0, 0.2, 0.2, 0.2).finished();
   // The hypothesis score of the searches.
-  Metric metric = Metric::kClosestPoint;
+  Metric metric = Metric::kAuto;
+  int sparse_scan_points = 5000;  // kAuto: targets with fewer points per scan use kClosestPointRaw
+  // kClosestPointRaw: the reference thinned to this [m], distances capped at this [m].
+  double raw_reference_voxel = 0.4;
+  double raw_max_distance = 2.0;
+  int raw_max_points = 4000;     // the target evenly thinned to this for kClosestPointRaw
+  // Hypotheses farther than region * spread from the initial guess in any DOF score infinity,
+  // and a solution outside that region is not a success: the spread is the stated uncertainty.
+  // (A 2D ladar's scan plane laid into a flat ground fits the ground perfectly, kilometres from
+  // the truth; the region keeps the search out of such degenerate families.)
+  double region = 1.5;
   double bin_size = 3.0;         // feature bin [m] (2-4 m worked best)
   double trim_fraction = 0.5;    // eq 4.1 Fraction
   double feature_voxel = 0.25;   // clouds thinned to this before feature extraction [m]
@@ -88,12 +101,13 @@ class HypothesisCost {
   HypothesisCost(const CalibrationInput& input, const CalibrationParams& params);
   double operator()(const Pose6& target_extrinsic);
   bool valid() const { return valid_; }
+  Metric metric() const { return params_.metric; }
 
  private:
   CalibrationParams params_;
   ScanSet target_;
   FeatureExtractor extractor_;
-  KdTree ref_maxima_, ref_minima_;
+  KdTree ref_maxima_, ref_minima_, ref_points_;
   HeightGrid ref_grid_;
   PointVector accumulated_;
   FeatureSet features_;

@@ -42,8 +42,10 @@ struct ExperimentOptions {
   // When >= 0: poses along a corridor instead of a disk, x within +-max_offset of the centre,
   // y within +-max_lateral, yaw within +-max_yaw (driving along an alley).
   double max_lateral = -1.0;
-  // A 2D ladar at 75 Hz gives several scans while the vehicle stands at a pose (noise differs).
-  int sick_scans_per_pose = 5;
+  // A 2D ladar sees one line per scan; it is accumulated while the vehicle drives from each pose
+  // to the next (poses interpolated, straight segments), this many scans per segment. The 3D
+  // sensors scan once at each pose.
+  int sick_scans_per_pose = 20;
   sim::NoiseProfile noise = sim::NoiseProfile::kTable41;
   Pose6 guess_offset = (Pose6() << 1.0, 1.0, 1.0, 0.2, 0.2, 0.2).finished();  // uniform +-
 };

@@ -10,7 +10,11 @@ namespace ladar_perception {
 namespace calibration {
 
 bool parseMetric(const std::string& name, Metric* metric) {
-  if (name == "closest_point") {
+  if (name == "auto") {
+    *metric = Metric::kAuto;
+  } else if (name == "closest_point_raw") {
+    *metric = Metric::kClosestPointRaw;
+  } else if (name == "closest_point") {
     *metric = Metric::kClosestPoint;
   } else if (name == "average_height") {
     *metric = Metric::kAverageHeight;
@@ -59,7 +63,20 @@ HypothesisCost::HypothesisCost(const CalibrationInput& input, const CalibrationP
   accumulate(input.reference, input.reference_extrinsic, &reference);
   reference = voxelDownsample(reference, params.feature_voxel);
   if (reference.empty() || target_.empty()) return;
-  if (params.metric == Metric::kAverageHeight) {
+  if (params_.metric == Metric::kAuto) {
+    const double per_scan = static_cast<double>(input.target.numPoints()) /
+                            std::max<std::size_t>(1, input.target.numScans());
+    params_.metric = per_scan < params.sparse_scan_points ? Metric::kClosestPointRaw
+                                                          : Metric::kClosestPoint;
+  }
+  if (params_.metric == Metric::kClosestPointRaw) {
+    target_ = thinScans(input.target, params.feature_voxel,
+                        static_cast<std::size_t>(std::max(0, params.raw_max_points)));
+    ref_points_.build(voxelDownsample(reference, params.raw_reference_voxel));
+    valid_ = true;
+    return;
+  }
+  if (params_.metric == Metric::kAverageHeight) {
     ref_grid_.build(reference, params.bin_size);
     valid_ = !ref_grid_.empty();
     return;
@@ -73,8 +90,27 @@ HypothesisCost::HypothesisCost(const CalibrationInput& input, const CalibrationP
 
 double HypothesisCost::operator()(const Pose6& target_extrinsic) {
   if (!valid_) return std::numeric_limits<double>::infinity();
+  for (int i = 0; i < 6; ++i) {  // outside the search region
+    const double d = i < 3 ? std::abs(target_extrinsic[i] - params_.initial[i])
+                           : std::abs(wrapAngle(target_extrinsic[i] - params_.initial[i]));
+    if (params_.spread[i] > 0 && d > params_.region * params_.spread[i]) {
+      return std::numeric_limits<double>::infinity();
+    }
+  }
   accumulate(target_, toIsometry(target_extrinsic), &accumulated_);
   if (params_.metric == Metric::kAverageHeight) return ref_grid_.error(accumulated_);
+  if (params_.metric == Metric::kClosestPointRaw) {
+    // eq 4.1 over the points, with distances capped (a far point costs the cap, and the KD-tree
+    // search stops there).
+    const float cap2 = static_cast<float>(params_.raw_max_distance * params_.raw_max_distance);
+    scratch_.resize(accumulated_.size());
+    for (std::size_t i = 0; i < accumulated_.size(); ++i) {
+      float d2 = cap2;
+      if (ref_points_.nearest(accumulated_[i], &d2, cap2) < 0) d2 = cap2;
+      scratch_[i] = d2;
+    }
+    return trimmedMean(&scratch_, params_.trim_fraction);
+  }
   extractor_.extract(accumulated_, &features_);
   if (features_.maxima.empty()) return std::numeric_limits<double>::infinity();
   // eq 4.1 over the local maxima, and over the local minima when enabled; one trimmed mean
@@ -214,9 +250,18 @@ CalibrationResult calibrate(const CalibrationInput& input, const CalibrationPara
   for (int d : out.observability.unobservable) estimate[d] = params.initial[d];
   out.extrinsic = estimate;
 
+  bool outside = false;
+  for (int i = 0; i < 6; ++i) {
+    const double d = i < 3 ? std::abs(estimate[i] - params.initial[i])
+                           : std::abs(wrapAngle(estimate[i] - params.initial[i]));
+    outside = outside || (params.spread[i] > 0 && d > params.region * params.spread[i]);
+  }
   std::ostringstream msg;
   if (cancelled) {
     msg << "cancelled";
+  } else if (outside) {
+    msg << "the solution left the search region (initial guess +- " << params.region
+        << " x spread): " << estimate.transpose();
   } else if (lin.correspondences < 100) {
     msg << "too few correspondences between the clouds at the solution (" << lin.correspondences
         << "): do the sensors see the same surfaces?";

@@ -116,11 +116,21 @@ bool makeTrial(const sim::World& world, const PairSetup& pair, const ExperimentO
     for (int side = 0; side < 2; ++side) {
       const SensorSetup& s = side == 0 ? pair.reference : pair.target;
       ScanSet& set = side == 0 ? out->input.reference : out->input.target;
-      const int repeats = s.kind == SensorKind::kSick ? std::max(1, options.sick_scans_per_pose) : 1;
+      const bool sweep = s.kind == SensorKind::kSick;
+      const int repeats = sweep ? std::max(1, options.sick_scans_per_pose) : 1;
       for (int r = 0; r < repeats; ++r) {
+        Eigen::Isometry3d vehicle = poses[k];
+        if (sweep && k + 1 < poses.size()) {  // driving from pose k towards pose k + 1
+          const double f = static_cast<double>(r) / repeats;
+          const Eigen::Vector3d a = poses[k].translation(), b = poses[k + 1].translation();
+          const double yaw_a = std::atan2(poses[k].linear()(1, 0), poses[k].linear()(0, 0));
+          const double yaw_b = std::atan2(poses[k + 1].linear()(1, 0), poses[k + 1].linear()(0, 0));
+          const Eigen::Vector3d p = a + f * (b - a);
+          vehicle = world.vehiclePose(p.x(), p.y(), yaw_a + f * wrapAngle(yaw_b - yaw_a));
+        }
         stream = sim::mix64(stream + 1);
-        if (!simulateSensor(world, s, poses[k], options.noise, stream, &points, error)) return false;
-        set.addScan(stamp + r / 75.0, poses[k], points);
+        if (!simulateSensor(world, s, vehicle, options.noise, stream, &points, error)) return false;
+        set.addScan(stamp + r / 75.0, vehicle, points);
       }
     }
   }

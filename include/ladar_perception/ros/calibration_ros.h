@@ -1,0 +1,109 @@
+// ROS adapter of the calibration (nodelet ladar_perception/Calibration): buffers the reference
+// and target sensors' scans with the vehicle pose (odom -> base_link from tf2) at each stamp, and
+// serves ~calibrate (srv/Calibrate.srv), ~reset and ~save (std_srvs/Trigger). The calibration
+// itself is one core call (calibration::calibrate) on a worker thread; the services are served
+// from the adapter's own callback queue and spinner, so the nodelet's queue never waits on it.
+// Progress is published on ~progress (std_msgs/String, one line per iteration) and
+// ~progress_estimate (geometry_msgs/TransformStamped, the current estimate).
+//
+// The vehicle pose is looked up with canTransform/lookupTransform (no waiting) and scans whose
+// pose is not yet in the tf buffer wait in a small pending queue drained by a timer; a
+// tf2_ros::MessageFilter cannot be used because the target sensor's frame is, by definition, not
+// (correctly) connected to the tree.
+#pragma once
+
+#include <atomic>
+#include <deque>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <thread>
+
+#include <ros/callback_queue.h>
+#include <ros/ros.h>
+#include <sensor_msgs/LaserScan.h>
+#include <sensor_msgs/PointCloud2.h>
+#include <std_srvs/Trigger.h>
+#include <tf2_ros/buffer.h>
+#include <tf2_ros/transform_listener.h>
+
+#include "ladar_perception/Calibrate.h"
+#include "ladar_perception/calibration/calibrator.h"
+
+namespace ladar_perception {
+
+// Message -> points in the sensor frame (no algorithm: the core's readers). False with a reason.
+bool calibrationPoints(const sensor_msgs::PointCloud2& msg, double min_range, double max_range,
+                       calibration::PointVector* points, std::string* error);
+bool calibrationPoints(const sensor_msgs::LaserScan& msg, calibration::PointVector* points,
+                       std::string* error);
+
+class CalibrationRos {
+ public:
+  // nh: topics `reference` and `target` (remap them); private_nh: parameters, services,
+  // progress topics.
+  CalibrationRos(ros::NodeHandle nh, ros::NodeHandle private_nh);
+  ~CalibrationRos();
+
+  std::size_t bufferedScans(bool target) const;
+
+ private:
+  struct BufferedScan {
+    double stamp = 0;
+    Eigen::Isometry3d vehicle_pose = Eigen::Isometry3d::Identity();
+    calibration::PointVector points;
+  };
+  struct PendingScan {
+    ros::Time stamp;
+    calibration::PointVector points;
+  };
+  struct Sensor {
+    std::string type;   // PointCloud2 or LaserScan
+    std::string frame;  // from the messages (or the parameter)
+    std::deque<BufferedScan> buffer;
+    std::deque<PendingScan> pending;
+    ros::Subscriber subscriber;
+    std::size_t dropped = 0;
+  };
+
+  void cloudCallback(const sensor_msgs::PointCloud2ConstPtr& msg, bool target);
+  void scanCallback(const sensor_msgs::LaserScanConstPtr& msg, bool target);
+  void enqueue(bool target, const std::string& frame, const ros::Time& stamp,
+               calibration::PointVector&& points);
+  void drainPending(const ros::TimerEvent&);
+  bool calibrateService(ladar_perception::Calibrate::Request& req,
+                        ladar_perception::Calibrate::Response& res);
+  bool resetService(std_srvs::Trigger::Request& req, std_srvs::Trigger::Response& res);
+  bool saveService(std_srvs::Trigger::Request& req, std_srvs::Trigger::Response& res);
+  void runCalibration(const ladar_perception::Calibrate::Request& req,
+                      ladar_perception::Calibrate::Response& res);
+  bool publishProgress(const calibration::SearchProgress& p);
+  std::string outputPath() const;
+
+  ros::NodeHandle nh_, private_nh_, service_nh_;
+  ros::CallbackQueue service_queue_;
+  std::unique_ptr<ros::AsyncSpinner> service_spinner_;
+  ros::Publisher progress_pub_, progress_estimate_pub_;
+  ros::ServiceServer calibrate_srv_, reset_srv_, save_srv_;
+  ros::Timer drain_timer_;
+
+  tf2_ros::Buffer tf_buffer_;
+  std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
+
+  // Parameters.
+  std::string odom_frame_, base_frame_, output_file_;
+  int buffer_size_ = 50;
+  double buffer_voxel_ = 0.1, min_range_ = 0.5, max_range_ = 120.0, tf_wait_ = 2.0;
+
+  mutable std::mutex mutex_;  // sensors_, last result
+  Sensor sensors_[2];         // 0 reference, 1 target
+  bool have_result_ = false;
+  calibration::CalibrationResult last_result_;
+  std::string last_child_frame_;
+
+  std::atomic<bool> busy_{false};
+  std::atomic<bool> shutting_down_{false};
+  std::atomic<int> progress_iteration_{0};
+};
+
+}  // namespace ladar_perception

@@ -1,0 +1,423 @@
+#include "ladar_perception/ros/calibration_ros.h"
+
+#include <cmath>
+#include <cstdlib>
+#include <future>
+#include <sstream>
+
+#include <geometry_msgs/TransformStamped.h>
+#include <std_msgs/String.h>
+#include <tf2_eigen/tf2_eigen.h>
+
+#include "ladar_perception/calibration/result_yaml.h"
+#include "ladar_perception/ros/cloud_conversion.h"
+
+namespace ladar_perception {
+
+namespace cal = calibration;
+
+bool calibrationPoints(const sensor_msgs::PointCloud2& msg, double min_range, double max_range,
+                       cal::PointVector* points, std::string* error) {
+  CloudLayout layout;
+  PointCloudView view;
+  if (!viewOf(msg, &layout, &view, error)) return false;
+  cal::pointsFromView(view, min_range, max_range, points);
+  return true;
+}
+
+bool calibrationPoints(const sensor_msgs::LaserScan& msg, cal::PointVector* points,
+                       std::string* error) {
+  if (!std::isfinite(msg.angle_min) || !std::isfinite(msg.angle_increment) ||
+      msg.angle_increment == 0.f) {
+    *error = "LaserScan with an unusable angle_min/angle_increment";
+    return false;
+  }
+  cal::pointsFromLaserScan(msg.ranges.data(), msg.ranges.size(), msg.angle_min,
+                           msg.angle_increment, msg.range_min, msg.range_max, points);
+  return true;
+}
+
+namespace {
+
+bool readPose6(const ros::NodeHandle& nh, const std::string& name, const cal::Pose6& fallback,
+               cal::Pose6* out) {
+  *out = fallback;
+  XmlRpc::XmlRpcValue v;
+  if (!nh.getParam(name, v)) return true;
+  if (v.getType() != XmlRpc::XmlRpcValue::TypeArray || v.size() != 6) return false;
+  for (int i = 0; i < 6; ++i) {
+    if (v[i].getType() == XmlRpc::XmlRpcValue::TypeDouble) {
+      (*out)[i] = static_cast<double>(v[i]);
+    } else if (v[i].getType() == XmlRpc::XmlRpcValue::TypeInt) {
+      (*out)[i] = static_cast<int>(v[i]);
+    } else {
+      return false;
+    }
+  }
+  return true;
+}
+
+std::string poseText(const cal::Pose6& p) {
+  std::ostringstream s;
+  s.precision(4);
+  s << std::fixed << "x " << p[0] << " y " << p[1] << " z " << p[2] << " roll " << p[3]
+    << " pitch " << p[4] << " yaw " << p[5];
+  return s.str();
+}
+
+}  // namespace
+
+CalibrationRos::CalibrationRos(ros::NodeHandle nh, ros::NodeHandle private_nh)
+    : nh_(nh), private_nh_(private_nh), service_nh_(private_nh) {
+  odom_frame_ = private_nh_.param<std::string>("odom_frame", "odom");
+  base_frame_ = private_nh_.param<std::string>("base_frame", "base_link");
+  output_file_ = private_nh_.param<std::string>("output_file", "");
+  buffer_size_ = std::max(1, private_nh_.param("buffer_size", 50));
+  buffer_voxel_ = private_nh_.param("buffer_voxel", 0.1);
+  min_range_ = private_nh_.param("min_range", 0.5);
+  max_range_ = private_nh_.param("max_range", 120.0);
+  tf_wait_ = private_nh_.param("tf_wait", 2.0);
+  sensors_[0].type = private_nh_.param<std::string>("reference_type", "PointCloud2");
+  sensors_[1].type = private_nh_.param<std::string>("target_type", "PointCloud2");
+  sensors_[0].frame = private_nh_.param<std::string>("reference_frame", "");
+  sensors_[1].frame = private_nh_.param<std::string>("target_frame", "");
+  const std::string method = private_nh_.param<std::string>("method", cal::defaultMethod());
+  if (!cal::isMethod(method)) {
+    ROS_ERROR_STREAM("Calibration: unknown method '" << method << "' in ~method; requests that "
+                     "name no method will be refused");
+  }
+
+  tf_listener_.reset(new tf2_ros::TransformListener(tf_buffer_, nh_));
+
+  // Publishers first, services and subscribers last.
+  progress_pub_ = private_nh_.advertise<std_msgs::String>("progress", 20);
+  progress_estimate_pub_ =
+      private_nh_.advertise<geometry_msgs::TransformStamped>("progress_estimate", 20);
+
+  service_nh_.setCallbackQueue(&service_queue_);
+  calibrate_srv_ = service_nh_.advertiseService("calibrate", &CalibrationRos::calibrateService, this);
+  reset_srv_ = service_nh_.advertiseService("reset", &CalibrationRos::resetService, this);
+  save_srv_ = service_nh_.advertiseService("save", &CalibrationRos::saveService, this);
+  // Two threads: one may wait on a running calibration while the other answers "busy".
+  service_spinner_.reset(new ros::AsyncSpinner(2, &service_queue_));
+  service_spinner_->start();
+
+  drain_timer_ = nh_.createTimer(ros::Duration(0.05), &CalibrationRos::drainPending, this);
+  const int queue = private_nh_.param("queue_size", 20);
+  for (int s = 0; s < 2; ++s) {
+    const bool target = s == 1;
+    const std::string topic = target ? "target" : "reference";
+    if (sensors_[s].type == "LaserScan") {
+      sensors_[s].subscriber = nh_.subscribe<sensor_msgs::LaserScan>(
+          topic, queue,
+          [this, target](const sensor_msgs::LaserScanConstPtr& m) { scanCallback(m, target); });
+    } else {
+      if (sensors_[s].type != "PointCloud2") {
+        ROS_ERROR_STREAM("Calibration: ~" << topic << "_type must be PointCloud2 or LaserScan, not '"
+                         << sensors_[s].type << "'; using PointCloud2");
+        sensors_[s].type = "PointCloud2";
+      }
+      sensors_[s].subscriber = nh_.subscribe<sensor_msgs::PointCloud2>(
+          topic, queue,
+          [this, target](const sensor_msgs::PointCloud2ConstPtr& m) { cloudCallback(m, target); });
+    }
+  }
+}
+
+CalibrationRos::~CalibrationRos() {
+  shutting_down_ = true;  // a running calibration stops at its next progress report
+  for (Sensor& s : sensors_) s.subscriber.shutdown();
+  drain_timer_.stop();
+  if (service_spinner_) service_spinner_->stop();
+  calibrate_srv_.shutdown();
+  reset_srv_.shutdown();
+  save_srv_.shutdown();
+}
+
+std::size_t CalibrationRos::bufferedScans(bool target) const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return sensors_[target ? 1 : 0].buffer.size();
+}
+
+void CalibrationRos::cloudCallback(const sensor_msgs::PointCloud2ConstPtr& msg, bool target) {
+  try {
+    cal::PointVector points;
+    std::string error;
+    if (!calibrationPoints(*msg, min_range_, max_range_, &points, &error)) {
+      ROS_ERROR_STREAM_THROTTLE(5.0, "Calibration: unreadable " << (target ? "target" : "reference")
+                                << " cloud: " << error);
+      return;
+    }
+    enqueue(target, msg->header.frame_id, msg->header.stamp, std::move(points));
+  } catch (const std::exception& e) {
+    ROS_ERROR_STREAM_THROTTLE(5.0, "Calibration: cloud callback failed: " << e.what());
+  }
+}
+
+void CalibrationRos::scanCallback(const sensor_msgs::LaserScanConstPtr& msg, bool target) {
+  try {
+    cal::PointVector points;
+    std::string error;
+    if (!calibrationPoints(*msg, &points, &error)) {
+      ROS_ERROR_STREAM_THROTTLE(5.0, "Calibration: unreadable " << (target ? "target" : "reference")
+                                << " scan: " << error);
+      return;
+    }
+    enqueue(target, msg->header.frame_id, msg->header.stamp, std::move(points));
+  } catch (const std::exception& e) {
+    ROS_ERROR_STREAM_THROTTLE(5.0, "Calibration: scan callback failed: " << e.what());
+  }
+}
+
+void CalibrationRos::enqueue(bool target, const std::string& frame, const ros::Time& stamp,
+                             cal::PointVector&& points) {
+  if (buffer_voxel_ > 0) points = cal::voxelDownsample(points, buffer_voxel_);
+  std::lock_guard<std::mutex> lock(mutex_);
+  Sensor& s = sensors_[target ? 1 : 0];
+  if (s.frame.empty()) s.frame = frame;
+  if (frame != s.frame) {
+    ROS_WARN_STREAM_THROTTLE(5.0, "Calibration: " << (target ? "target" : "reference")
+                             << " message in frame '" << frame << "', expected '" << s.frame
+                             << "'; ignored");
+    return;
+  }
+  s.pending.push_back({stamp, std::move(points)});
+  while (s.pending.size() > static_cast<std::size_t>(4 * buffer_size_)) {
+    s.pending.pop_front();
+    ++s.dropped;
+  }
+}
+
+void CalibrationRos::drainPending(const ros::TimerEvent&) {
+  try {
+    std::lock_guard<std::mutex> lock(mutex_);
+    const ros::Time now = ros::Time::now();
+    for (int k = 0; k < 2; ++k) {
+      Sensor& s = sensors_[k];
+      while (!s.pending.empty()) {
+        PendingScan& p = s.pending.front();
+        std::string why;
+        if (tf_buffer_.canTransform(odom_frame_, base_frame_, p.stamp, &why)) {
+          const geometry_msgs::TransformStamped t =
+              tf_buffer_.lookupTransform(odom_frame_, base_frame_, p.stamp);
+          BufferedScan b;
+          b.stamp = p.stamp.toSec();
+          b.vehicle_pose = tf2::transformToEigen(t);
+          b.points = std::move(p.points);
+          s.pending.pop_front();
+          s.buffer.push_back(std::move(b));
+          while (s.buffer.size() > static_cast<std::size_t>(buffer_size_)) s.buffer.pop_front();
+          continue;
+        }
+        if ((now - p.stamp).toSec() > tf_wait_) {
+          ROS_WARN_STREAM_THROTTLE(5.0, "Calibration: no vehicle pose " << odom_frame_ << " -> "
+                                   << base_frame_ << " at a " << (k ? "target" : "reference")
+                                   << " scan's stamp after " << tf_wait_ << " s; scan dropped ("
+                                   << why << ")");
+          s.pending.pop_front();
+          ++s.dropped;
+          continue;
+        }
+        break;  // stamps are ordered: later scans wait too
+      }
+    }
+  } catch (const std::exception& e) {
+    ROS_ERROR_STREAM_THROTTLE(5.0, "Calibration: buffering failed: " << e.what());
+  }
+}
+
+bool CalibrationRos::publishProgress(const cal::SearchProgress& p) {
+  const int n = ++progress_iteration_;
+  std_msgs::String line;
+  std::ostringstream s;
+  s << p.stage << " iteration " << n << " (stage " << p.iteration << "), evaluations "
+    << p.evaluations << ", best cost " << p.best_cost << ", spread [" << p.spread.transpose()
+    << "], estimate " << poseText(p.estimate);
+  line.data = s.str();
+  progress_pub_.publish(line);
+  geometry_msgs::TransformStamped est = tf2::eigenToTransform(cal::toIsometry(p.estimate));
+  est.header.stamp = ros::Time::now();
+  est.header.frame_id = base_frame_;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    est.child_frame_id = sensors_[1].frame;
+  }
+  progress_estimate_pub_.publish(est);
+  return !shutting_down_ && ros::ok();
+}
+
+std::string CalibrationRos::outputPath() const {
+  if (!output_file_.empty()) return output_file_;
+  const char* ros_home = std::getenv("ROS_HOME");
+  const char* home = std::getenv("HOME");
+  const std::string dir = ros_home ? ros_home : (home ? std::string(home) + "/.ros" : "/tmp");
+  std::string child = last_child_frame_.empty() ? "target" : last_child_frame_;
+  for (char& c : child) {
+    if (c == '/') c = '_';
+  }
+  return dir + "/ladar_calibration_" + child + ".yaml";
+}
+
+bool CalibrationRos::calibrateService(ladar_perception::Calibrate::Request& req,
+                                      ladar_perception::Calibrate::Response& res) {
+  if (busy_.exchange(true)) {
+    res.success = false;
+    res.message = "busy: a calibration is running (progress iteration " +
+                  std::to_string(progress_iteration_.load()) + "); try again when it answers";
+    return true;
+  }
+  try {
+    runCalibration(req, res);
+  } catch (const std::exception& e) {
+    res.success = false;
+    res.message = std::string("calibration failed: ") + e.what();
+  }
+  busy_ = false;
+  return true;
+}
+
+void CalibrationRos::runCalibration(const ladar_perception::Calibrate::Request& req,
+                                    ladar_perception::Calibrate::Response& res) {
+  const auto fail = [&res](const std::string& why) {
+    res.success = false;
+    res.message = why;
+  };
+  cal::CalibrationParams params;
+  params.method = req.method.empty() ? private_nh_.param<std::string>("method", cal::defaultMethod())
+                                     : req.method;
+  if (!cal::isMethod(params.method)) {
+    std::string names;
+    for (const std::string& m : cal::methodNames()) names += " " + m;
+    return fail("unknown method '" + params.method + "' (methods:" + names + ")");
+  }
+  if (params.method == "particle_filter") {
+    const cal::CalibrationParams thesis = cal::thesisParticleFilterParams();
+    params.search = thesis.search;
+  }
+  params.bin_size = private_nh_.param("bin_size", params.bin_size);
+  params.trim_fraction = private_nh_.param("trim_fraction", params.trim_fraction);
+  if (!readPose6(private_nh_, "spread", params.spread, &params.spread) ||
+      !readPose6(private_nh_, "initial_guess", params.initial, &params.initial)) {
+    return fail("~initial_guess and ~spread must be lists of 6 numbers (x y z roll pitch yaw)");
+  }
+  const geometry_msgs::Transform& g = req.initial_guess;
+  const bool guess_given = g.translation.x != 0 || g.translation.y != 0 || g.translation.z != 0 ||
+                           g.rotation.x != 0 || g.rotation.y != 0 || g.rotation.z != 0 ||
+                           g.rotation.w != 0;
+  if (guess_given) {
+    const Eigen::Quaterniond q(g.rotation.w, g.rotation.x, g.rotation.y, g.rotation.z);
+    if (!(q.norm() > 1e-6) || !std::isfinite(q.norm())) return fail("initial_guess has a zero or non-finite rotation");
+    Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
+    t.linear() = q.normalized().toRotationMatrix();
+    t.translation() << g.translation.x, g.translation.y, g.translation.z;
+    params.initial = cal::fromIsometry(t);
+  }
+  if (!req.spread.empty()) {
+    if (req.spread.size() != 6) return fail("spread must have 6 values (x y z roll pitch yaw) or none");
+    for (int i = 0; i < 6; ++i) params.spread[i] = req.spread[i];
+  }
+
+  // Snapshot of the buffers (the subscribers keep filling them meanwhile).
+  cal::CalibrationInput input;
+  std::string reference_frame, target_frame;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    reference_frame = sensors_[0].frame;
+    target_frame = sensors_[1].frame;
+    for (int k = 0; k < 2; ++k) {
+      cal::ScanSet& set = k == 0 ? input.reference : input.target;
+      for (const BufferedScan& b : sensors_[k].buffer) set.addScan(b.stamp, b.vehicle_pose, b.points);
+    }
+  }
+  if (input.reference.empty() || input.target.empty()) {
+    return fail("no data: " + std::to_string(input.reference.numScans()) + " reference and " +
+                std::to_string(input.target.numScans()) + " target scans with a vehicle pose are "
+                "buffered; drive the vehicle with both sensors publishing and tf " + odom_frame_ +
+                " -> " + base_frame_ + " available");
+  }
+  try {
+    input.reference_extrinsic = tf2::transformToEigen(
+        tf_buffer_.lookupTransform(base_frame_, reference_frame, ros::Time(0)));
+  } catch (const tf2::TransformException& e) {
+    return fail("the reference's extrinsic " + base_frame_ + " -> " + reference_frame +
+                " is not in tf: " + e.what());
+  }
+
+  progress_iteration_ = 0;
+  // The work runs on its own thread; this service thread (the adapter's queue) only waits.
+  auto future = std::async(std::launch::async, [&]() {
+    return cal::calibrate(input, params,
+                          [this](const cal::SearchProgress& p) { return publishProgress(p); });
+  });
+  const cal::CalibrationResult result = future.get();
+
+  res.success = result.success;
+  res.message = result.message;
+  res.transform = tf2::eigenToTransform(cal::toIsometry(result.extrinsic));
+  res.transform.header.stamp = ros::Time::now();
+  res.transform.header.frame_id = base_frame_;
+  res.transform.child_frame_id = target_frame;
+  res.stddev.assign(result.stddev.data(), result.stddev.data() + 6);
+  res.final_cost = result.final_cost;
+  res.unobservable = result.unobservable;
+  res.elapsed = result.elapsed;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    last_result_ = result;
+    last_child_frame_ = target_frame;
+    have_result_ = true;
+  }
+  const std::string path = outputPath();
+  res.launch_line = cal::staticTransformLaunchLine(path, base_frame_, target_frame);
+  if (result.success) {
+    std::string error;
+    if (cal::writeStaticTransformYaml(path, base_frame_, target_frame, result, &error)) {
+      res.message += "; written to " + path;
+    } else {
+      res.message += "; NOT written: " + error;
+    }
+  } else {
+    res.message += "; not written (call ~save to write it anyway)";
+  }
+  ROS_INFO_STREAM("Calibration " << (result.success ? "succeeded" : "did not succeed") << " in "
+                  << result.elapsed << " s: " << poseText(result.extrinsic) << "; "
+                  << res.message);
+}
+
+bool CalibrationRos::resetService(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  std::size_t n = 0;
+  for (Sensor& s : sensors_) {
+    n += s.buffer.size() + s.pending.size();
+    s.buffer.clear();
+    s.pending.clear();
+  }
+  have_result_ = false;
+  res.success = true;
+  res.message = "cleared " + std::to_string(n) + " buffered scans" +
+                (busy_ ? " (a running calibration keeps its own copy)" : "");
+  return true;
+}
+
+bool CalibrationRos::saveService(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res) {
+  cal::CalibrationResult result;
+  std::string child;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (!have_result_) {
+      res.success = false;
+      res.message = "nothing to save: no calibration has run since start or reset";
+      return true;
+    }
+    result = last_result_;
+    child = last_child_frame_;
+  }
+  const std::string path = outputPath();
+  std::string error;
+  res.success = cal::writeStaticTransformYaml(path, base_frame_, child, result, &error);
+  res.message = res.success ? "written to " + path + (result.success ? "" : " (the result was not a success: see its comments)")
+                            : error;
+  return true;
+}
+
+}  // namespace ladar_perception
