@@ -12,6 +12,7 @@
 
 #include "ladar_perception/ground/ground_evaluation.h"
 #include "ladar_perception/ground/vertical_scan.h"
+#include "ladar_perception/io/image.h"
 
 using namespace ladar_perception;
 
@@ -25,6 +26,52 @@ std::vector<std::string> split(const std::string& s) {
 }
 }  // namespace
 
+// Top-down picture of the middle scan of the evaluation: correct ground dark green, correct
+// obstacle dark red, missed obstacle magenta, false obstacle yellow, unknown grey; 80 m wide.
+void writeErrorPng(const std::string& path, const std::string& world_name, GroundModel* model,
+                   sim::NoiseProfile noise, int scans, uint32_t seed) {
+  sim::World world;
+  std::string error;
+  if (!sim::makeStandardWorld(world_name, seed, &world, &error)) return;
+  const int k = scans / 2;
+  const double t = world.driveDuration() * (k + 0.5) / scans;
+  const Eigen::Isometry3d mount = evaluationSensorMount();
+  sim::SimulatedScan scan;
+  sim::simulateVelodyneRevolution(world, world.drivePose(t) * mount,
+                                  sim::VelodyneModel::hdl64e(noise), seed * 1000u + k, &scan);
+  PointCloudView view;
+  if (!scan.cloud.view(&view, &error)) return;
+  SensorPose pose;
+  pose.sensor_to_ground = mount.cast<float>();
+  GroundClassification res;
+  model->classify(view, pose, &res);
+  const int size = 1000;
+  const float ppm = size / 80.f;
+  RgbImage img(size, size, 10, 10, 14);
+  for (int pass = 0; pass < 2; ++pass) {
+    for (std::size_t i = 0; i < res.size(); ++i) {
+      const auto c = static_cast<sim::SurfaceClass>(scan.truth[i]);
+      const bool g = sim::isGroundClass(c);
+      const uint8_t l = res.labels[i];
+      const bool wrong = (g && l != kLabelGround) || (!g && l != kLabelObstacle);
+      if (wrong != (pass == 1)) continue;
+      uint8_t rgb[3] = {110, 110, 110};
+      if (l == kLabelUnknown) {
+      } else if (!wrong) {
+        rgb[0] = g ? 20 : 120; rgb[1] = g ? 90 : 20; rgb[2] = g ? 30 : 20;
+      } else if (g) {
+        rgb[0] = 255; rgb[1] = 230; rgb[2] = 0;
+      } else {
+        rgb[0] = 255; rgb[1] = 0; rgb[2] = 255;
+      }
+      const Eigen::Vector3f p = view.xyz(i);
+      img.set(static_cast<int>(size / 2 - p.y() * ppm), static_cast<int>(size / 2 - p.x() * ppm),
+              rgb[0], rgb[1], rgb[2]);
+    }
+  }
+  writePng(path, img, &error);
+}
+
 int main(int argc, char** argv) {
   std::vector<std::string> worlds = {"flat", "urban", "hillside", "potholes"};
   std::vector<std::string> methods = {groundModelNames().front()};
@@ -32,7 +79,8 @@ int main(int argc, char** argv) {
   int scans = 10;
   uint32_t seed = 1;
   bool per_class = false;
-  std::vector<std::string> sets;  // key=value overrides of the vertical scan params
+  std::vector<std::string> sets;
+  std::string png_prefix;  // PREFIX_<world>.png: the middle scan's errors, top-down  // key=value overrides of the vertical scan params
   std::string cmdline = "ground_eval";
   for (int i = 1; i < argc; ++i) cmdline += std::string(" ") + argv[i];
   for (int i = 1; i < argc; ++i) {
@@ -48,6 +96,7 @@ int main(int argc, char** argv) {
     else if (a == "--seed") seed = static_cast<uint32_t>(std::strtoul(next().c_str(), nullptr, 10));
     else if (a == "--classes") per_class = true;
     else if (a == "--set") sets.push_back(next());
+    else if (a == "--png-errors") png_prefix = next();
     else {
       std::cerr << "usage: ground_eval [--worlds a,b] [--method m1,m2] "
                    "[--noise datasheet|table4.1|none] [--scans N] [--seed S] [--classes] [--set key=value]...\n";
@@ -95,6 +144,7 @@ int main(int argc, char** argv) {
         status = 1;
         continue;
       }
+      if (!png_prefix.empty()) writeErrorPng(png_prefix + "_" + w + ".png", w, model.get(), noise, scans, seed);
       std::printf("| %s | %s | %s | %zu | %zu | %.2f%% | %.2f%% | %.2f%% |", w.c_str(),
                   model->name().c_str(), noise_name.c_str(), acc.scans, acc.points,
                   100.0 * acc.groundPrecision(), 100.0 * acc.groundRecall(),

@@ -37,25 +37,32 @@ struct VerticalScanParams {
   ObstacleToleranceParams tolerances;
 
   // --- Beyond the thesis (5.1.2 future work). All off in the thesis mode.
-  bool bend_ground_line = true;           // piecewise ground line: slope may change with r
-  float segment_length = 10.0f;           // radial length of one ground-line segment [m]
-  float max_bend = 0.15f;                 // largest slope change from one segment to the next
-  float segment_gate = 0.3f;              // height residual [m] at which a return stops
-                                          // counting as ground evidence for a segment
+  // Bent ground line: the column's ground is tracked outward through its representatives
+  // (a return continues the ground when it lies within the tolerances of the line extrapolated
+  // from the ground so far and the local slope to the last ground return is passable), so the
+  // line bends where the terrain's slope changes and steps up a curb onto the sidewalk.
+  bool bend_ground_line = true;
+  float segment_length = 1.0f;            // knot spacing of the piecewise ground line [m]
+  float track_max_step = 0.2f;            // highest return above the extrapolated ground [m]
+  float track_max_drop = 0.06f;           // deepest return below it [m]
+  float track_tolerance_per_m = 0.05f;    // both grow by this per metre of gap [m/m]
+  float track_max_local_slope = 1.0f;     // steepest rise from the last ground return
+  float track_min_local_slope = -0.4f;    // steepest fall from the last ground return
+  float track_anchor_distance = 3.0f;     // the extrapolation slope spans at least this [m]
   bool couple_columns = true;             // neighbouring columns share ground evidence
   int coupling_radius = 2;                // columns on each side that are coupled
   int min_ground_returns = 3;             // fewer feasible returns: borrow from neighbours
   bool negative_obstacles = true;         // returns well below the ground line are obstacles
   // GndErrorMax for returns BELOW the ground line (potholes, ditches) at r = 0 [m]; grows with
   // r like tolerances.gnd_error_max_per_m. 0 = the same tolerance as above the line (thesis).
-  float negative_gnd_error_max = 0.f;
+  float negative_gnd_error_max = 0.1f;
   // Vertical surfaces (curb faces, the lower parts of cars and walls): a second obstacle
   // probability from the local terrain slope |dHeight/dr| between a return and the
   // representatives of the laser rows just below and above it in its column (the smaller of
   // the two), combined with GndError as in eq 3.15. P = max(P_3.15, P_vertical).
   bool vertical_surfaces = true;
   float vertical_gnd_error_max = 0.06f;   // GndError at which P_vertical's first factor is 1 [m]
-  float vertical_slope_max = 1.0f;        // local slope at which its second factor is 1
+  float vertical_slope_max = 0.5f;        // local slope at which its second factor is 1
 };
 
 // Settings by name: "thesis" (the thesis's method and settings) and "default" (beyond it).
@@ -139,14 +146,18 @@ struct GroundLine {
   }
 };
 
-// The bent ground line (beyond the thesis, 5.1.2): starting from the straight estimate
-// `slope0`, each segment's slope is re-estimated from the returns inside it with weights that
-// fall off with the height residual to the line so far (gate), are monotone in r (as eq 3.7)
-// and biased downward (as eq 3.6); a segment may bend by at most max_bend. Writes `knots`
-// heights and each segment's support (sum of raw weights) into knot_height / segment_support.
-void fitBentLine(const float* r, const float* height, int n, const VerticalScanParams& p,
-                 float slope0, int knots, float* knot_height, float* segment_support,
-                 float* weights);
+// The bent ground line (beyond the thesis, 5.1.2): walks the column's representatives (sorted
+// by r) from the ground point under the sensor, extrapolating with the slope of the ground so
+// far (seeded with the straight estimate `slope0`, eqs 3.4-3.9) and accepting a return as
+// ground when (a) its residual to the extrapolation lies in [-(track_max_drop + g dr),
+// track_max_step + g dr] (dr = gap to the last ground return, g = track_tolerance_per_m) and
+// (b) its slope from the last ground return lies in [track_min_local_slope,
+// track_max_local_slope]. The accepted polyline is sampled at the knots (extrapolated beyond
+// the last ground return); knot_support gets 1 / (1 + distance to the nearest ground return).
+// `scratch` holds at least 2 * (n + 1) floats. Returns the number of accepted returns.
+int trackGroundLine(const float* r, const float* height, int n, const VerticalScanParams& p,
+                    float slope0, int knots, float* knot_height, float* knot_support,
+                    float* scratch);
 
 }  // namespace vertical_scan
 

@@ -59,6 +59,18 @@ VerticalScanParams verticalScanThesisParams() {
 
 VerticalScanParams verticalScanDefaultParams() {
   VerticalScanParams p;
+  // Tuned on the simulator's urban, hillside and potholes worlds (ground_eval): the bent line
+  // tracks the terrain, so GndErrorMax can be small and the SlopeError factor (which shrinks
+  // a fixed height with range, eq 3.15) saturates early.
+  p.tolerances.gnd_error_max_base = 0.3f;
+  p.tolerances.gnd_error_max_per_m = 0.005f;
+  p.tolerances.slope_error_max_base = 0.004f;
+  p.tolerances.slope_error_max_per_m = 0.f;
+  p.tolerances.obstacle_threshold = 0.5f;
+  p.negative_gnd_error_max = 0.1f;
+  p.vertical_slope_max = 0.5f;
+  p.track_max_step = 0.2f;
+  p.track_tolerance_per_m = 0.05f;
   return p;
 }
 
@@ -162,61 +174,70 @@ float estimateSlope(const float* r, const float* height, int n, const VerticalSc
   return estimate;
 }
 
-void fitBentLine(const float* r, const float* height, int n, const VerticalScanParams& p,
-                 float slope0, int knots, float* knot_height, float* segment_support,
-                 float* weights) {
-  const float L = p.segment_length;
-  const float gate = std::max(p.segment_gate, 1e-3f);
-  const float inv_gate = 1.f / gate;
-  // Downward bias of the residual, the height-unit twin of WeightBias (eq 3.6).
-  const float bias = p.weight_bias * 2.f;
-  knot_height[0] = 0.f;
-  float slope_prev = slope0;
-  int i = 0;
-  for (int k = 0; k + 1 < knots; ++k) {
-    const float r0 = static_cast<float>(k) * L;
-    const float r1 = r0 + L;
-    const float g0 = knot_height[k];
-    const int a = i;
-    while (i < n && r[i] < r1) ++i;
-    const int b = (k + 2 == knots) ? n : i;  // the last segment takes everything beyond
-    if (k + 2 == knots) i = n;
-    float slope = slope_prev;
-    float support = 0.f;
-    if (b > a) {
-      const float lo = std::max(p.ground_slope_min, slope_prev - p.max_bend);
-      const float hi = std::min(p.ground_slope_max, slope_prev + p.max_bend);
-      for (int it = 0; it < p.iterations; ++it) {
-        float prev_w = 1.f;
-        float sww = 0.f, swd = 0.f, sw = 0.f;
-        for (int j = a; j < b; ++j) {
-          const float dr = r[j] - r0;
-          const float res = height[j] - (g0 + slope * dr);
-          float w = 1.f - std::fabs(res + bias) * inv_gate;
-          w = w > 0.f ? w : 0.f;
-          w = w < prev_w ? w : prev_w;  // as eq 3.7
-          prev_w = w;
-          weights[j] = w;
-          sw += w;
-          sww += w * dr * dr;
-          swd += w * dr * (height[j] - g0);
-        }
-        support = sw;
-        if (!(sww > 1e-3f)) break;
-        float s = swd / sww;
-        s = std::min(std::max(s, lo), hi);
-        if (std::fabs(s - slope) < 1e-5f) {
-          slope = s;
-          break;
-        }
-        slope = s;
-      }
+int trackGroundLine(const float* r, const float* height, int n, const VerticalScanParams& p,
+                    float slope0, int knots, float* knot_height, float* knot_support,
+                    float* scratch) {
+  float* gr = scratch;           // accepted ground returns, starting with the sensor's
+  float* gh = scratch + n + 1;   // ground point (0, 0)
+  int m = 0;
+  gr[m] = 0.f;
+  gh[m] = 0.f;
+  ++m;
+  float slope = slope0;
+  int anchor = 0;
+  bool last_steep = false;  // the newest ground return was a step (steeper than ground_slope_max)
+  for (int i = 0; i < n; ++i) {
+    const float dr = r[i] - gr[m - 1];
+    const float dh = height[i] - gh[m - 1];
+    const float grow = p.track_tolerance_per_m * (dr > 0.f ? dr : 0.f);
+    const float res = dh - slope * dr;
+    if (res > p.track_max_step + grow || res < -(p.track_max_drop + grow)) continue;
+    const float local = dh / (std::fabs(dr) + 0.02f);
+    if (local > p.track_max_local_slope || local < p.track_min_local_slope) continue;
+    if (dr <= 0.f) continue;  // same distance as the last ground return: keep the first
+    const bool steep = local > p.ground_slope_max;
+    if (steep && last_steep) {
+      // Two steps in a row climb a wall or a car, not a curb: the previous step was not
+      // ground either.
+      --m;
+      if (anchor > m - 1) anchor = m - 1 > 0 ? m - 1 : 0;
+      last_steep = false;
+      continue;
     }
-    segment_support[k] = support;
-    knot_height[k + 1] = g0 + slope * L;
-    slope_prev = slope;
+    last_steep = steep;
+    gr[m] = r[i];
+    gh[m] = height[i];
+    ++m;
+    // The extrapolation slope: from the newest ground return back over at least
+    // track_anchor_distance (noise on closely spaced returns does not tilt it).
+    while (anchor + 1 < m - 1 && r[i] - gr[anchor + 1] >= p.track_anchor_distance) ++anchor;
+    const float span = r[i] - gr[anchor];
+    if (span >= p.track_anchor_distance || anchor == 0) {
+      float s = (height[i] - gh[anchor]) / std::max(span, 1e-3f);
+      s = std::min(std::max(s, p.ground_slope_min), p.ground_slope_max);
+      slope = s;
+    }
   }
-  segment_support[knots - 1] = 0.f;
+  // Sample the polyline at the knots.
+  const float L = p.segment_length;
+  int j = 0;
+  for (int k = 0; k < knots; ++k) {
+    const float rk = static_cast<float>(k) * L;
+    while (j + 1 < m && gr[j + 1] < rk) ++j;
+    float h;
+    float dist;
+    if (j + 1 < m) {
+      const float t = (rk - gr[j]) / std::max(gr[j + 1] - gr[j], 1e-3f);
+      h = gh[j] + (gh[j + 1] - gh[j]) * std::min(std::max(t, 0.f), 1.f);
+      dist = std::min(rk - gr[j], gr[j + 1] - rk);
+    } else {
+      h = gh[m - 1] + slope * (rk - gr[m - 1]);
+      dist = rk - gr[m - 1];
+    }
+    knot_height[k] = h;
+    knot_support[k] = 1.f / (1.f + std::max(dist, 0.f));
+  }
+  return m - 1;
 }
 
 }  // namespace vertical_scan
@@ -238,7 +259,7 @@ void VerticalScanGround::setParams(const VerticalScanParams& params) {
   if (!(p.max_range > p.min_range)) p.max_range = p.min_range + 120.f;
   if (p.iterations < 0) p.iterations = 0;
   if (p.iterations > 100) p.iterations = 100;
-  if (!(p.segment_length >= 0.5f)) p.segment_length = 10.f;
+  if (!(p.segment_length >= 0.1f)) p.segment_length = 1.f;
   if (p.coupling_radius < 0) p.coupling_radius = 0;
   if (!(p.tolerances.gnd_error_max_base > 1e-4f)) p.tolerances.gnd_error_max_base = 1e-4f;
   if (!(p.tolerances.slope_error_max_base > 1e-5f)) p.tolerances.slope_error_max_base = 1e-5f;
@@ -363,7 +384,8 @@ void VerticalScanGround::binPoints(const PointCloudView& view, const SensorPose&
     const bool steep = ay > ax;
     const float mx = steep ? ay : ax;
     const float mn = steep ? ax : ay;
-    float a = atan_lut[static_cast<int>(mn / mx * kAtanCells + 0.5f)];  // mx > 0: r >= kMinR
+    // mx is 0 for a point straight above or below the sensor (x = y = 0): column 0.
+    float a = atan_lut[static_cast<int>((mx > 0.f ? mn / mx : 0.f) * kAtanCells + 0.5f)];
     a = steep ? quarter - a : a;
     a = gx < 0.f ? 2.f * quarter - a : a;
     a = gy < 0.f ? -a : a;
@@ -446,7 +468,7 @@ void VerticalScanGround::fitColumns() {
   const int rows = rows_;
   col_r_.resize(static_cast<std::size_t>(columns_) * rows);
   col_h_.resize(col_r_.size());
-  col_w_.resize(std::max<std::size_t>(rows, 1));
+  col_w_.resize(2 * (static_cast<std::size_t>(rows) + 1));
   rep_r_.assign(static_cast<std::size_t>(columns_) * rows, -1.f);
   rep_h_.resize(rep_r_.size());
   std::vector<int>& col_n = column_support_;
@@ -524,9 +546,9 @@ void VerticalScanGround::fitColumns() {
     float* kh = &knot_height_[static_cast<std::size_t>(c) * K];
     float* ks = &knot_support_[static_cast<std::size_t>(c) * K];
     if (p.bend_ground_line) {
-      vertical_scan::fitBentLine(&col_r_[static_cast<std::size_t>(c) * rows],
-                                 &col_h_[static_cast<std::size_t>(c) * rows], col_count[c], p,
-                                 column_slope_[c], K, kh, ks, col_w_.data());
+      vertical_scan::trackGroundLine(&col_r_[static_cast<std::size_t>(c) * rows],
+                                     &col_h_[static_cast<std::size_t>(c) * rows], col_count[c], p,
+                                     column_slope_[c], K, kh, ks, col_w_.data());
     } else {
       kh[0] = 0.f;
       kh[1] = column_slope_[c] * p.segment_length;
@@ -545,7 +567,7 @@ void VerticalScanGround::fitColumns() {
         float sw = 0.f, swh = 0.f;
         for (int j = -R; j <= R; ++j) {
           const int cc = (c + j + columns_) % columns_;
-          const float w = (knot_support_[static_cast<std::size_t>(cc) * K + k - 1] + 1e-3f) /
+          const float w = (knot_support_[static_cast<std::size_t>(cc) * K + k] + 1e-3f) /
                           (1.f + static_cast<float>(std::abs(j)));
           sw += w;
           swh += w * knot_height_[static_cast<std::size_t>(cc) * K + k];
@@ -654,8 +676,12 @@ bool setVerticalScanParam(VerticalScanParams* p, const std::string& key, double 
       {"tolerances.slope_error_max_per_m", &t.slope_error_max_per_m},
       {"tolerances.obstacle_threshold", &t.obstacle_threshold},
       {"segment_length", &p->segment_length},
-      {"max_bend", &p->max_bend},
-      {"segment_gate", &p->segment_gate},
+      {"track_max_step", &p->track_max_step},
+      {"track_max_drop", &p->track_max_drop},
+      {"track_tolerance_per_m", &p->track_tolerance_per_m},
+      {"track_max_local_slope", &p->track_max_local_slope},
+      {"track_min_local_slope", &p->track_min_local_slope},
+      {"track_anchor_distance", &p->track_anchor_distance},
       {"negative_gnd_error_max", &p->negative_gnd_error_max},
       {"vertical_gnd_error_max", &p->vertical_gnd_error_max},
       {"vertical_slope_max", &p->vertical_slope_max},

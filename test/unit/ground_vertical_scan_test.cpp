@@ -1,0 +1,486 @@
+// Vertical scan ground extraction (thesis 3.3): each equation on hand-made columns, the row
+// assignment from elevation, and whole synthetic scans in every input layout.
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "ladar_perception/cloud/laser_elevations.h"
+#include "ladar_perception/ground/ground_model.h"
+#include "ladar_perception/ground/obstacle_probability.h"
+#include "ladar_perception/ground/vertical_scan.h"
+
+using namespace ladar_perception;
+
+namespace {
+
+constexpr float kDeg = 3.14159265f / 180.f;
+constexpr float kSensorHeight = 1.73f;
+
+// ---------------------------------------------------------------- equations on one column
+
+TEST(VerticalScanEquations, FeasibilityIsStrictSlopeWindow) {  // eq 3.4
+  VerticalScanParams p = verticalScanThesisParams();
+  p.ground_slope_min = -0.2f;
+  p.ground_slope_max = 0.2f;
+  EXPECT_TRUE(vertical_scan::feasible(0.0f, 10.f, p));
+  EXPECT_TRUE(vertical_scan::feasible(1.9f, 10.f, p));
+  EXPECT_FALSE(vertical_scan::feasible(2.0f, 10.f, p));   // slope 0.2 is not < 0.2
+  EXPECT_FALSE(vertical_scan::feasible(-2.5f, 10.f, p));
+  EXPECT_FALSE(vertical_scan::feasible(1.5f, 5.f, p));    // a 1.5 m object 5 m away
+}
+
+TEST(VerticalScanEquations, FlatColumnGivesZeroSlope) {  // eqs 3.6-3.9
+  VerticalScanParams p = verticalScanThesisParams();
+  std::vector<float> r, h, w(64);
+  for (int i = 0; i < 30; ++i) {
+    r.push_back(4.f + i);
+    h.push_back(0.f);
+  }
+  int support = 0;
+  const float s = vertical_scan::estimateSlope(r.data(), h.data(), 30, p, 0.f, w.data(), &support);
+  EXPECT_NEAR(s, 0.f, 1e-6f);
+  EXPECT_EQ(support, 30);  // all equal heights: nothing above the mean to reject
+}
+
+TEST(VerticalScanEquations, SlopedColumnIsRecovered) {
+  VerticalScanParams p = verticalScanThesisParams();
+  p.weight_bias = 0.f;
+  std::vector<float> r, h, w(64);
+  for (int i = 0; i < 30; ++i) {
+    r.push_back(4.f + i);
+    h.push_back(0.05f * r.back());
+  }
+  const float s = vertical_scan::estimateSlope(r.data(), h.data(), 30, p, 0.f, w.data());
+  // Every return has slope 0.05: the weighted mean of equal slopes is that slope.
+  EXPECT_NEAR(s, 0.05f, 1e-5f);
+}
+
+TEST(VerticalScanEquations, UpperHalfRejectionIgnoresObstacleReturns) {  // eq 3.5
+  VerticalScanParams p = verticalScanThesisParams();
+  p.weight_bias = 0.f;
+  // Ground up to 12 m, then a feasible but raised return set (a low wall at 20 m).
+  std::vector<float> r = {4, 5, 6, 7, 8, 9, 10, 11, 12, 20, 20.1f, 20.2f};
+  std::vector<float> h = {0, 0, 0, 0, 0, 0, 0, 0, 0, 1.0f, 1.5f, 2.0f};
+  std::vector<float> w(r.size());
+  int support = 0;
+  const float s = vertical_scan::estimateSlope(r.data(), h.data(), static_cast<int>(r.size()), p,
+                                               0.f, w.data(), &support);
+  EXPECT_NEAR(s, 0.f, 1e-6f);
+  EXPECT_EQ(support, 9);  // the three wall returns are above the mean height
+}
+
+TEST(VerticalScanEquations, WeightBiasPullsTheEstimateDown) {  // eq 3.6
+  // Ground returns at two levels (slopes -0.002 and -0.012) and one high feasible return that
+  // lifts the mean, so eq 3.5 keeps all the ground returns. The bias favours the lower ones.
+  std::vector<float> r, h, w(64);
+  for (int i = 0; i < 20; ++i) {
+    r.push_back(5.f + i);
+    h.push_back((i % 2 ? -0.002f : -0.012f) * r.back());
+  }
+  r.push_back(30.f);
+  h.push_back(3.f);
+  VerticalScanParams p = verticalScanThesisParams();
+  p.weight_bias = 0.f;
+  const float unbiased = vertical_scan::estimateSlope(r.data(), h.data(), 21, p, 0.f, w.data());
+  p.weight_bias = 0.3f;
+  const float biased = vertical_scan::estimateSlope(r.data(), h.data(), 21, p, 0.f, w.data());
+  EXPECT_LT(biased, unbiased);
+  EXPECT_GT(biased, -0.013f);
+}
+
+TEST(VerticalScanEquations, MonotoneWeightsStopDistantOutliers) {  // eq 3.7
+  // Near ground returns at slope 0, then distant returns on a 0.2-slope plateau that eq 3.5
+  // keeps (a very high return lifts the mean). Without eq 3.7 the many far returns would pull
+  // the estimate up; with it a far return never weighs more than a nearer one.
+  std::vector<float> r, h, w(128);
+  for (int i = 0; i < 5; ++i) { r.push_back(4.f + i); h.push_back(0.f); }
+  for (int i = 0; i < 40; ++i) { r.push_back(20.f + i * 0.5f); h.push_back(0.1f * r.back() - 1.9f); }
+  r.push_back(60.f); h.push_back(20.f);
+  VerticalScanParams p = verticalScanThesisParams();
+  p.weight_bias = 0.f;
+  p.ground_slope_max = 0.5f;
+  const float s = vertical_scan::estimateSlope(r.data(), h.data(), static_cast<int>(r.size()), p,
+                                               0.f, w.data());
+  EXPECT_LT(std::fabs(s), 0.05f);
+}
+
+TEST(VerticalScanEquations, GroundAndSlopeErrors) {  // eqs 3.10, 3.11
+  EXPECT_FLOAT_EQ(vertical_scan::groundError(0.1f, 10.f, 0.5f), 0.5f);
+  EXPECT_FLOAT_EQ(vertical_scan::groundError(0.f, 10.f, 1.5f), -1.5f);  // above: negative
+  EXPECT_FLOAT_EQ(vertical_scan::slopeError(0.1f, 10.f, 0.5f), 0.05f);
+  EXPECT_FLOAT_EQ(vertical_scan::slopeError(0.f, 10.f, 1.5f), -0.15f);
+}
+
+TEST(VerticalScanEquations, ObstacleProbabilityWithGrowingTolerances) {  // eq 3.15
+  ObstacleToleranceParams t;
+  t.gnd_error_max_base = 0.2f;
+  t.gnd_error_max_per_m = 0.01f;
+  t.slope_error_max_base = 0.1f;
+  t.slope_error_max_per_m = 0.f;
+  EXPECT_FLOAT_EQ(obstacleProbability(0.f, 0.f, 5.f, t), 0.f);
+  EXPECT_FLOAT_EQ(obstacleProbability(-1.f, -0.2f, 5.f, t), 1.f);         // both saturate
+  EXPECT_NEAR(obstacleProbability(-0.125f, -0.05f, 5.f, t), 0.5f * 0.5f, 1e-6f);
+  EXPECT_NEAR(obstacleProbability(0.125f, 0.05f, 5.f, t), 0.25f, 1e-6f);   // below: |GndError|
+  // The same error scores lower far away: GndErrorMax(25) = 0.45.
+  EXPECT_LT(obstacleProbability(-0.3f, -0.1f, 25.f, t), obstacleProbability(-0.3f, -0.1f, 5.f, t));
+}
+
+TEST(VerticalScanEquations, TrackedLineBendsAndStepsOntoASidewalk) {
+  VerticalScanParams p = verticalScanDefaultParams();
+  p.segment_length = 1.f;
+  // Flat to 8 m, a 15 cm curb, flat sidewalk to 12 m, then a 10 % hill.
+  std::vector<float> r, h;
+  for (float x = 4.f; x < 8.f; x += 0.4f) { r.push_back(x); h.push_back(0.f); }
+  for (float x = 8.2f; x < 12.f; x += 0.4f) { r.push_back(x); h.push_back(0.15f); }
+  for (float x = 12.f; x < 30.f; x += 0.8f) { r.push_back(x); h.push_back(0.15f + 0.1f * (x - 12.f)); }
+  const int knots = 40;
+  std::vector<float> kh(knots), ks(knots), scratch(2 * (r.size() + 1));
+  const int accepted = vertical_scan::trackGroundLine(r.data(), h.data(), static_cast<int>(r.size()), p,
+                                                      0.f, knots, kh.data(), ks.data(), scratch.data());
+  EXPECT_EQ(accepted, static_cast<int>(r.size()));
+  vertical_scan::GroundLine line{kh.data(), knots, 1.f / p.segment_length};
+  EXPECT_NEAR(line.heightAt(6.f), 0.f, 0.01f);
+  EXPECT_NEAR(line.heightAt(10.f), 0.15f, 0.01f);
+  EXPECT_NEAR(line.heightAt(25.f), 0.15f + 1.3f, 0.05f);
+}
+
+TEST(VerticalScanEquations, TrackedLineDoesNotClimbAWall) {
+  VerticalScanParams p = verticalScanDefaultParams();
+  std::vector<float> r, h;
+  for (float x = 4.f; x < 10.f; x += 0.4f) { r.push_back(x); h.push_back(0.f); }
+  // An oblique wall: heights rise 0.3 m per 0.3 m of r (the column cuts the wall at a slant).
+  for (int i = 1; i <= 10; ++i) { r.push_back(10.f + 0.3f * i); h.push_back(0.3f * i); }
+  const int knots = 30;
+  std::vector<float> kh(knots), ks(knots), scratch(2 * (r.size() + 1));
+  vertical_scan::trackGroundLine(r.data(), h.data(), static_cast<int>(r.size()), p, 0.f, knots,
+                                 kh.data(), ks.data(), scratch.data());
+  vertical_scan::GroundLine line{kh.data(), knots, 1.f / p.segment_length};
+  EXPECT_LT(line.heightAt(12.f), 0.35f);
+  EXPECT_LT(line.heightAt(13.f), 0.5f);
+}
+
+// ---------------------------------------------------------------- row assignment
+
+TEST(ElevationRowTable, EveryHdl64eLaserMapsToItsRing) {
+  const std::vector<float>& el = hdl64eElevationsDeg();
+  ASSERT_EQ(el.size(), 64u);
+  for (std::size_t i = 1; i < el.size(); ++i) EXPECT_LT(el[i - 1], el[i]);
+  EXPECT_NEAR(el.front(), -24.8f, 1e-4f);
+  EXPECT_NEAR(el.back(), 2.0f, 1e-4f);
+  ElevationRowTable table;
+  table.build(el);
+  EXPECT_EQ(table.rows(), 64);
+  for (int ring = 0; ring < 64; ++ring) {
+    for (float r : {3.f, 10.f, 50.f}) {
+      const float z = r * std::tan(el[ring] * kDeg);
+      EXPECT_EQ(table.row(z, r), ring) << "ring " << ring << " r " << r;
+      // A tenth of the spacing off the laser's angle still maps to it.
+      const float gap = ring + 1 < 64 ? el[ring + 1] - el[ring] : el[ring] - el[ring - 1];
+      EXPECT_EQ(table.row(r * std::tan((el[ring] + 0.1f * gap) * kDeg), r), ring);
+      EXPECT_EQ(table.row(r * std::tan((el[ring] - 0.1f * gap) * kDeg), r), ring);
+    }
+  }
+  // Beyond the table: the end rows.
+  EXPECT_EQ(table.row(-100.f, 1.f), 0);
+  EXPECT_EQ(table.row(100.f, 1.f), 63);
+}
+
+TEST(ElevationRowTable, UnsortedCustomTable) {
+  ElevationRowTable table;
+  table.build({10.f, -10.f, 0.f});
+  EXPECT_EQ(table.rows(), 3);
+  EXPECT_EQ(table.row(std::tan(-10.f * kDeg), 1.f), 0);
+  EXPECT_EQ(table.row(0.f, 1.f), 1);
+  EXPECT_EQ(table.row(std::tan(9.f * kDeg), 1.f), 2);
+}
+
+// ---------------------------------------------------------------- whole scans
+
+// A synthetic HDL-64E revolution over flat ground 1.73 m below the sensor with one box (2 m
+// deep, 4 m wide, 1.5 m high) 10 m ahead. Rays that miss everything within 80 m are NaN, as
+// in an organised cloud.
+struct SyntheticScan {
+  std::vector<float> x, y, z;
+  std::vector<int> ring;
+  std::vector<uint8_t> truth_obstacle;  // 1 = box
+  static constexpr int kAzimuths = 900;
+  SyntheticScan() {
+    const std::vector<float>& el = hdl64eElevationsDeg();
+    for (int ring_i = 0; ring_i < 64; ++ring_i) {
+      for (int a = 0; a < kAzimuths; ++a) {
+        const float az = (a + 0.5f) * 2.f * 3.14159265f / kAzimuths;
+        const float e = el[ring_i] * kDeg;
+        const float dx = std::cos(e) * std::cos(az), dy = std::cos(e) * std::sin(az), dz = std::sin(e);
+        float t_hit = std::numeric_limits<float>::infinity();
+        uint8_t obstacle = 0;
+        if (dz < 0.f) t_hit = -kSensorHeight / dz;
+        // Box: x in [10, 12], y in [-2, 2], z in [-1.73, -0.23] (sensor frame).
+        if (dx > 0.f) {
+          const float t = 10.f / dx;
+          const float yy = dy * t, zz = dz * t;
+          if (std::fabs(yy) <= 2.f && zz >= -kSensorHeight && zz <= -0.23f && t < t_hit) {
+            t_hit = t;
+            obstacle = 1;
+          }
+        }
+        if (!(t_hit < 80.f)) t_hit = std::numeric_limits<float>::quiet_NaN();
+        x.push_back(dx * t_hit);
+        y.push_back(dy * t_hit);
+        z.push_back(dz * t_hit);
+        ring.push_back(ring_i);
+        truth_obstacle.push_back(obstacle);
+      }
+    }
+  }
+  std::size_t size() const { return x.size(); }
+};
+
+const SyntheticScan& scan() {
+  static const SyntheticScan s;
+  return s;
+}
+
+// Fills a cloud of `layout` from the synthetic scan (fields by name).
+PackedCloud fill(CloudLayout layout, bool with_ring_values = true) {
+  const SyntheticScan& s = scan();
+  PackedCloud c;
+  c.layout = layout;
+  c.data.assign(static_cast<std::size_t>(layout.row_step) * layout.height, 0);
+  for (std::size_t i = 0; i < s.size(); ++i) {
+    const std::size_t row = i / layout.width, col = i % layout.width;
+    uint8_t* pt = c.data.data() + row * layout.row_step + col * layout.point_step;
+    for (const FieldDesc& f : layout.fields) {
+      if (f.name == "x") writeField(pt, f, s.x[i]);
+      else if (f.name == "y") writeField(pt, f, s.y[i]);
+      else if (f.name == "z") writeField(pt, f, s.z[i]);
+      else if ((f.name == "ring" || f.name == "channel") && with_ring_values) writeField(pt, f, s.ring[i]);
+      else if (f.name == "intensity") writeField(pt, f, 100.0);
+    }
+  }
+  return c;
+}
+
+void expectGoodLabels(const PackedCloud& cloud, const std::string& method = "vertical_scan") {
+  PointCloudView view;
+  std::string error;
+  ASSERT_TRUE(cloud.view(&view, &error)) << error;
+  std::unique_ptr<GroundModel> model = makeGroundModel(method, &error);
+  ASSERT_TRUE(model) << error;
+  GroundClassification out;
+  model->classify(view, SensorPose::fromHeight(kSensorHeight), &out);
+  ASSERT_EQ(out.size(), scan().size());
+  std::size_t ground_ok = 0, ground_n = 0, obst_ok = 0, obst_n = 0;
+  for (std::size_t i = 0; i < out.size(); ++i) {
+    if (std::isnan(scan().x[i])) {
+      EXPECT_EQ(out.labels[i], kLabelUnknown);
+      continue;
+    }
+    if (scan().truth_obstacle[i]) {
+      ++obst_n;
+      obst_ok += out.labels[i] == kLabelObstacle;
+    } else {
+      ++ground_n;
+      ground_ok += out.labels[i] == kLabelGround;
+    }
+  }
+  ASSERT_GT(obst_n, 500u);
+  EXPECT_GT(static_cast<double>(ground_ok) / ground_n, 0.995) << method;
+  // The thesis's tolerances (SlopeErrorMax 0.15 for SlopeError = GndError / r) only flag the
+  // upper half of a 1.5 m box 10 m away; the default model flags the whole face.
+  EXPECT_GT(static_cast<double>(obst_ok) / obst_n, method == "vertical_scan_thesis" ? 0.5 : 0.97)
+      << method;
+}
+
+CloudLayout organised(CloudLayout l) {
+  l.height = 64;
+  l.width = SyntheticScan::kAzimuths;
+  l.row_step = l.width * l.point_step;
+  return l;
+}
+
+TEST(VerticalScanCloud, VelodynePacked22ByteXYZIRT) {
+  CloudLayout l = velodyneXYZIRTLayout(static_cast<uint32_t>(scan().size()));
+  EXPECT_EQ(l.point_step, 22u);
+  expectGoodLabels(fill(l));
+  expectGoodLabels(fill(l), "vertical_scan_thesis");
+}
+
+TEST(VerticalScanCloud, PclAligned32Byte) {
+  CloudLayout l = pclXYZILayout(static_cast<uint32_t>(scan().size()));
+  EXPECT_EQ(l.point_step, 32u);
+  expectGoodLabels(fill(l));
+}
+
+TEST(VerticalScanCloud, OusterStyleTypes) {
+  // Ouster: x,y,z,(pad),intensity float32, t uint32, reflectivity uint16, ring uint8 ("ring"
+  // here uint8; Ouster numbers beams from the top, so ring order is reversed).
+  CloudLayout l;
+  appendField(&l, "x", FieldType::kFloat32);
+  appendField(&l, "y", FieldType::kFloat32);
+  appendField(&l, "z", FieldType::kFloat32);
+  l.point_step += 4;
+  appendField(&l, "intensity", FieldType::kFloat32);
+  appendField(&l, "t", FieldType::kUInt32);
+  appendField(&l, "reflectivity", FieldType::kUInt16);
+  appendField(&l, "ring", FieldType::kUInt8);
+  l.point_step = 48;
+  l = organised(l);
+  PackedCloud c = fill(l);
+  const FieldDesc* ring = findField(c.layout, "ring");
+  for (std::size_t i = 0; i < scan().size(); ++i) {
+    writeField(c.data.data() + i * l.point_step, *ring, 63 - scan().ring[i]);
+  }
+  expectGoodLabels(c);
+}
+
+TEST(VerticalScanCloud, NoRingNoIntensityFloat64) {
+  CloudLayout l;
+  appendField(&l, "x", FieldType::kFloat64);
+  appendField(&l, "y", FieldType::kFloat64);
+  appendField(&l, "z", FieldType::kFloat64);
+  l.width = static_cast<uint32_t>(scan().size());
+  l.row_step = l.width * l.point_step;
+  expectGoodLabels(fill(l));
+}
+
+TEST(VerticalScanCloud, KittiStyleNoRing) {
+  expectGoodLabels(fill(xyziLayout(static_cast<uint32_t>(scan().size()))));
+  expectGoodLabels(fill(xyziLayout(static_cast<uint32_t>(scan().size()))), "vertical_scan_thesis");
+}
+
+TEST(VerticalScanCloud, OrganisedWithNaNAndPaddedRows) {
+  CloudLayout l = organised(pclXYZILayout(0));
+  l.row_step += 16;  // padding at the end of each row
+  expectGoodLabels(fill(l));
+}
+
+TEST(VerticalScanCloud, EmptyCloud) {
+  PackedCloud c;
+  c.layout = xyziLayout(0);
+  PointCloudView view;
+  ASSERT_TRUE(c.view(&view));
+  VerticalScanGround model;
+  GroundClassification out;
+  out.resize(5);
+  model.classify(view, SensorPose::fromHeight(kSensorHeight), &out);
+  EXPECT_EQ(out.size(), 0u);
+}
+
+TEST(VerticalScanCloud, NaNOnlyCloudIsUnknown) {
+  const uint32_t n = 1000;
+  PackedCloud c;
+  c.layout = xyziLayout(n);
+  c.data.resize(n * 16);
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const float inf = std::numeric_limits<float>::infinity();
+  for (uint32_t i = 0; i < n; ++i) {
+    const float v[4] = {i % 3 ? nan : inf, nan, -inf, 0.f};
+    std::memcpy(c.data.data() + i * 16, v, 16);
+  }
+  PointCloudView view;
+  ASSERT_TRUE(c.view(&view));
+  VerticalScanGround model;
+  GroundClassification out;
+  model.classify(view, SensorPose::fromHeight(kSensorHeight), &out);
+  EXPECT_EQ(out.count(kLabelUnknown), n);
+}
+
+TEST(VerticalScanCloud, TruncatedCloudIsRejectedBeforeClassification) {
+  PackedCloud c = fill(velodyneXYZIRTLayout(static_cast<uint32_t>(scan().size())));
+  c.data.resize(c.data.size() - 7);
+  PointCloudView view;
+  std::string error;
+  EXPECT_FALSE(c.view(&view, &error));
+  EXPECT_FALSE(error.empty());
+}
+
+TEST(VerticalScanCloud, TiltedSensorPose) {
+  // The sensor pitched 5 degrees nose down: points in the sensor frame are rotated; with the
+  // pose given, the labels stay right.
+  const SyntheticScan& s = scan();
+  const Eigen::AngleAxisf pitch(5.f * kDeg, Eigen::Vector3f::UnitY());
+  CloudLayout l = xyziLayout(static_cast<uint32_t>(s.size()));
+  PackedCloud c = fill(l);
+  for (std::size_t i = 0; i < s.size(); ++i) {
+    const Eigen::Vector3f p = pitch.inverse() * Eigen::Vector3f(s.x[i], s.y[i], s.z[i]);
+    std::memcpy(c.data.data() + i * 16, p.data(), 12);
+  }
+  PointCloudView view;
+  ASSERT_TRUE(c.view(&view));
+  SensorPose pose = SensorPose::fromHeight(kSensorHeight);
+  pose.sensor_to_ground.linear() = pitch.toRotationMatrix();
+  VerticalScanGround model;
+  GroundClassification out;
+  model.classify(view, pose, &out);
+  std::size_t wrong = 0, valid = 0;
+  for (std::size_t i = 0; i < s.size(); ++i) {
+    if (std::isnan(s.x[i])) continue;
+    ++valid;
+    wrong += out.labels[i] != (s.truth_obstacle[i] ? kLabelObstacle : kLabelGround);
+  }
+  EXPECT_LT(static_cast<double>(wrong) / valid, 0.01);
+}
+
+TEST(VerticalScanModel, NamesAndFactory) {
+  const std::vector<std::string> names = groundModelNames();
+  ASSERT_FALSE(names.empty());
+  EXPECT_EQ(names.front(), "vertical_scan");
+  std::string error;
+  for (const std::string& n : names) EXPECT_TRUE(makeGroundModel(n, &error)) << n;
+  EXPECT_FALSE(makeGroundModel("no_such_model", &error));
+  EXPECT_NE(error.find("no_such_model"), std::string::npos);
+  VerticalScanParams p = verticalScanThesisParams();
+  EXPECT_FALSE(p.bend_ground_line);
+  EXPECT_FALSE(p.couple_columns);
+  EXPECT_EQ(p.iterations, 9);
+  EXPECT_FLOAT_EQ(p.column_width_deg, 1.5f);
+  EXPECT_TRUE(setVerticalScanParam(&p, "weight_bias", 0.05, &error));
+  EXPECT_FLOAT_EQ(p.weight_bias, 0.05f);
+  EXPECT_FALSE(setVerticalScanParam(&p, "nope", 1.0, &error));
+  EXPECT_TRUE(makeVerticalScanModel(p));
+}
+
+TEST(VerticalScanModel, ReusedAcrossScansGivesTheSameLabels) {
+  PackedCloud c = fill(xyziLayout(static_cast<uint32_t>(scan().size())));
+  PointCloudView view;
+  ASSERT_TRUE(c.view(&view));
+  VerticalScanGround model;
+  GroundClassification a, b;
+  model.classify(view, SensorPose::fromHeight(kSensorHeight), &a);
+  model.classify(view, SensorPose::fromHeight(kSensorHeight), &b);
+  EXPECT_EQ(a.labels, b.labels);
+  EXPECT_EQ(a.p_obstacle, b.p_obstacle);
+}
+
+TEST(VerticalScanModel, OccludedColumnBorrowsItsNeighboursGround) {
+  // Flat ground 0.5 m below the line the thesis would assume (a sensor reported 0.5 m too
+  // high), with every return of a 6-degree wedge removed except a box face: the coupled
+  // model takes the neighbours' ground, so the box is still an obstacle and the far ground
+  // elsewhere stays ground.
+  const SyntheticScan& s = scan();
+  CloudLayout l = xyziLayout(static_cast<uint32_t>(s.size()));
+  PackedCloud c = fill(l);
+  PointCloudView view;
+  ASSERT_TRUE(c.view(&view));
+  VerticalScanGround model;
+  GroundClassification out;
+  model.classify(view, SensorPose::fromHeight(kSensorHeight + 0.3f), &out);
+  std::size_t ground_ok = 0, ground_n = 0;
+  for (std::size_t i = 0; i < s.size(); ++i) {
+    if (std::isnan(s.x[i]) || s.truth_obstacle[i]) continue;
+    ++ground_n;
+    ground_ok += out.labels[i] == kLabelGround;
+  }
+  // The tracked line follows the ground 0.3 m below the assumed origin height.
+  EXPECT_GT(static_cast<double>(ground_ok) / ground_n, 0.99);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  testing::InitGoogleTest(&argc, argv);
+  return RUN_ALL_TESTS();
+}
