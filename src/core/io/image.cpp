@@ -75,7 +75,10 @@ bool readPng(const std::string& path, GrayImage* image, std::string* error) {
     if (error) *error = "libpng could not be initialised";
     return false;
   }
+  // Everything that owns memory lives outside the setjmp scope: libpng's error handler
+  // longjmps back here and skips the destructors of anything declared after it.
   std::vector<uint8_t> buffer;
+  std::vector<png_bytep> rows;
   if (setjmp(png_jmpbuf(png))) {
     png_destroy_read_struct(&png, &info, nullptr);
     if (error) *error = path + " is not a readable PNG";
@@ -102,7 +105,7 @@ bool readPng(const std::string& path, GrayImage* image, std::string* error) {
   const int depth = png_get_bit_depth(png, info);
   const std::size_t row_bytes = png_get_rowbytes(png, info);
   buffer.resize(row_bytes * h);
-  std::vector<png_bytep> rows(h);
+  rows.resize(h);
   for (png_uint_32 y = 0; y < h; ++y) rows[y] = &buffer[y * row_bytes];
   png_read_image(png, rows.data());
   png_destroy_read_struct(&png, &info, nullptr);
