@@ -24,7 +24,10 @@ struct AnalogSignalParams {
   // The obstacle signal as a height above the fitted ground, (z + h) - h r s_fit(theta) [m]:
   // |height| below this is ground.
   float threshold = 0.2f;
-  int fit_rounds = 3;              // least-squares rounds; sectors off by > threshold drop out
+  int fit_rounds = 5;              // least-squares rounds; sectors off by > threshold drop out
+  // The first round uses only sectors within this height of level ground sensor_height below
+  // the sensor (the seed, as Algorithm 1's) [m].
+  float initial_gate = 0.3f;
   // Sectors whose median return points higher than this elevation never see nearby ground and
   // take no part in the fit [deg].
   float max_fit_elevation_deg = -2.0f;

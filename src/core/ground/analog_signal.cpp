@@ -89,8 +89,12 @@ void AnalogSignalGround::classify(const PointCloudView& view, const SensorPose& 
     const uint32_t i = mid->second;
     if (z_[i] / r_[i] >= max_tan) continue;  // this laser does not look at the ground here
     const int sector = static_cast<int>(b) % S;
+    // The first round starts from level ground at sensor_height (A = B = 0, no bias), as
+    // Algorithm 1 is seeded: sectors whose median is more than initial_gate off it (walls that
+    // fill a laser's view) wait until the model explains them.
+    const bool near_level = std::fabs(h * r_[i] * mid->first) < params_.initial_gate;
     sectors_.push_back({static_cast<int>(b) / S, (static_cast<float>(sector) + 0.5f) / sectors_per_rad - kPi,
-                        mid->first, r_[i], z_[i], true});
+                        mid->first, r_[i], z_[i], near_level});
   }
 
   // Joint least squares for A, B and each laser's DC bias, the biases eliminated by centring
@@ -128,6 +132,12 @@ void AnalogSignalGround::classify(const PointCloudView& view, const SensorPose& 
       v1 += sn * vn;
       ++used;
     }
+    // A weak prior toward the seed (A = B = 0, level ground), worth kPriorSectors sectors: it
+    // keeps a direction the sectors do not constrain (an alley seen only along its axis) level
+    // instead of amplifying noise; with the ground seen all around it is negligible.
+    constexpr double kPriorSectors = 4.0;
+    m00 += kPriorSectors;
+    m11 += kPriorSectors;
     const double det = m00 * m11 - m01 * m01;
     if (used < 3 || !(std::fabs(det) > 1e-12)) break;
     fit_.a = (m11 * v0 - m01 * v1) / det;
