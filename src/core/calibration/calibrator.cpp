@@ -246,8 +246,6 @@ CalibrationResult calibrate(const CalibrationInput& input, const CalibrationPara
                                            params.observability, cost_along);
   out.stddev = out.observability.stddev;
   out.unobservable = out.observability.unobservable_names;
-  // DOFs the scene cannot fix keep the initial guess rather than wherever the search drifted.
-  for (int d : out.observability.unobservable) estimate[d] = params.initial[d];
   out.extrinsic = estimate;
 
   bool outside = false;
@@ -268,7 +266,7 @@ CalibrationResult calibrate(const CalibrationInput& input, const CalibrationPara
   } else if (!out.unobservable.empty()) {
     msg << "the scene cannot fix " << joinNames(out.unobservable)
         << " (cost curvature " << out.observability.relative_min
-        << " of the strongest); those DOFs keep the initial guess; the others are calibrated";
+        << " of the strongest): their values are not determined by the data; the other DOFs are";
   } else {
     out.success = true;
     msg << params.method << ": " << out.evaluations << " evaluations, final cost "
