@@ -44,18 +44,22 @@ struct VerticalScanParams {
   bool bend_ground_line = true;
   float segment_length = 1.0f;            // knot spacing of the piecewise ground line [m]
   float track_max_step = 0.2f;            // highest return above the extrapolated ground [m]
-  float track_max_drop = 0.06f;           // deepest return below it [m]
+  float track_max_drop = 0.03f;           // deepest return below it [m]
   float track_tolerance_per_m = 0.05f;    // both grow by this per metre of gap [m/m]
   float track_max_local_slope = 1.0f;     // steepest rise from the last ground return
   float track_min_local_slope = -0.4f;    // steepest fall from the last ground return
   float track_anchor_distance = 3.0f;     // the extrapolation slope spans at least this [m]
+  float track_max_bend = 0.2f;            // extrapolation slope within +- this of the column's
+                                          // straight estimate (eqs 3.4-3.9)
+  float track_recover_distance = 1.5f;    // consistent returns below the line over this many
+                                          // metres restart it there (ground behind an obstacle)
   bool couple_columns = true;             // neighbouring columns share ground evidence
   int coupling_radius = 2;                // columns on each side that are coupled
   int min_ground_returns = 3;             // fewer feasible returns: borrow from neighbours
   bool negative_obstacles = true;         // returns well below the ground line are obstacles
   // GndErrorMax for returns BELOW the ground line (potholes, ditches) at r = 0 [m]; grows with
   // r like tolerances.gnd_error_max_per_m. 0 = the same tolerance as above the line (thesis).
-  float negative_gnd_error_max = 0.1f;
+  float negative_gnd_error_max = 0.05f;
   // Vertical surfaces (curb faces, the lower parts of cars and walls): a second obstacle
   // probability from the local terrain slope |dHeight/dr| between a return and the
   // representatives of the laser rows just below and above it in its column (the smaller of

@@ -67,7 +67,8 @@ VerticalScanParams verticalScanDefaultParams() {
   p.tolerances.slope_error_max_base = 0.004f;
   p.tolerances.slope_error_max_per_m = 0.f;
   p.tolerances.obstacle_threshold = 0.5f;
-  p.negative_gnd_error_max = 0.1f;
+  p.negative_gnd_error_max = 0.05f;
+  p.track_max_drop = 0.03f;
   p.vertical_slope_max = 0.5f;
   p.track_max_step = 0.2f;
   p.track_tolerance_per_m = 0.05f;
@@ -186,15 +187,43 @@ int trackGroundLine(const float* r, const float* height, int n, const VerticalSc
   float slope = slope0;
   int anchor = 0;
   bool last_steep = false;  // the newest ground return was a step (steeper than ground_slope_max)
+  // Returns below the extrapolation that agree with each other: where the ground reappears
+  // lower (behind an obstacle the line went over, or down a ditch wider than a pothole).
+  int below_first = -1, below_last = -1;
   for (int i = 0; i < n; ++i) {
     const float dr = r[i] - gr[m - 1];
     const float dh = height[i] - gh[m - 1];
     const float grow = p.track_tolerance_per_m * (dr > 0.f ? dr : 0.f);
     const float res = dh - slope * dr;
-    if (res > p.track_max_step + grow || res < -(p.track_max_drop + grow)) continue;
+    if (res < -(p.track_max_drop + grow)) {
+      // Below the line: remember a run of mutually consistent returns.
+      if (below_last >= 0 &&
+          std::fabs(height[i] - height[below_last]) <
+              p.track_max_drop + p.track_tolerance_per_m * (r[i] - r[below_last]) + 0.05f) {
+        below_last = i;
+      } else {
+        below_first = below_last = i;
+      }
+      if (r[below_last] - r[below_first] < p.track_recover_distance) continue;
+      // The run is long enough to be ground: restart the line at its first return.
+      gr[m] = r[below_first];
+      gh[m] = height[below_first];
+      ++m;
+      if (below_last != below_first) {
+        gr[m] = r[below_last];
+        gh[m] = height[below_last];
+        ++m;
+      }
+      anchor = m - 2 > 0 ? m - 2 : 0;
+      below_first = below_last = -1;
+      last_steep = false;
+      continue;
+    }
+    if (res > p.track_max_step + grow || dh > p.track_max_step + p.ground_slope_max * dr) continue;
     const float local = dh / (std::fabs(dr) + 0.02f);
     if (local > p.track_max_local_slope || local < p.track_min_local_slope) continue;
     if (dr <= 0.f) continue;  // same distance as the last ground return: keep the first
+    below_first = below_last = -1;
     const bool steep = local > p.ground_slope_max;
     if (steep && last_steep) {
       // Two steps in a row climb a wall or a car, not a curb: the previous step was not
@@ -215,6 +244,7 @@ int trackGroundLine(const float* r, const float* height, int n, const VerticalSc
     if (span >= p.track_anchor_distance || anchor == 0) {
       float s = (height[i] - gh[anchor]) / std::max(span, 1e-3f);
       s = std::min(std::max(s, p.ground_slope_min), p.ground_slope_max);
+      s = std::min(std::max(s, slope0 - p.track_max_bend), slope0 + p.track_max_bend);
       slope = s;
     }
   }
@@ -682,6 +712,8 @@ bool setVerticalScanParam(VerticalScanParams* p, const std::string& key, double 
       {"track_max_local_slope", &p->track_max_local_slope},
       {"track_min_local_slope", &p->track_min_local_slope},
       {"track_anchor_distance", &p->track_anchor_distance},
+      {"track_max_bend", &p->track_max_bend},
+      {"track_recover_distance", &p->track_recover_distance},
       {"negative_gnd_error_max", &p->negative_gnd_error_max},
       {"vertical_gnd_error_max", &p->vertical_gnd_error_max},
       {"vertical_slope_max", &p->vertical_slope_max},

@@ -1,0 +1,127 @@
+// Speed of the vertical scan ground extraction (one core call per iteration):
+//  - KITTI HDL-64 scans from /work/shared/data/kitti_hdl64 (or $LADAR_KITTI_DIR), skipped when
+//    the folder is absent;
+//  - a simulated HDL-64E revolution of the urban world (always available).
+//
+// Instruction count of one call (callgrind):
+//   valgrind --tool=callgrind --instr-atstart=no ground_vertical_scan_bench --callgrind-once FILE.bin
+// loads the file, warms nothing, and instruments exactly one classify call.
+#include <cstdlib>
+#include <cstring>
+#include <iostream>
+#include <string>
+
+#include <benchmark/benchmark.h>
+#include <valgrind/callgrind.h>
+
+#include "ladar_perception/ground/vertical_scan.h"
+#include "ladar_perception/io/kitti.h"
+#include "ladar_perception/sim/scan_simulator.h"
+#include "ladar_perception/sim/world.h"
+
+using namespace ladar_perception;
+
+namespace {
+
+std::string kittiDir() {
+  const char* env = std::getenv("LADAR_KITTI_DIR");
+  return env ? env : "/work/shared/data/kitti_hdl64";
+}
+
+void runClassify(benchmark::State& state, const PackedCloud& cloud, const SensorPose& pose,
+                 const VerticalScanParams& params) {
+  PointCloudView view;
+  std::string error;
+  if (!cloud.view(&view, &error)) {
+    state.SkipWithError(error.c_str());
+    return;
+  }
+  VerticalScanGround model(params);
+  GroundClassification out;
+  model.classify(view, pose, &out);  // workspace warm-up
+  for (auto _ : state) {
+    model.classify(view, pose, &out);
+    benchmark::DoNotOptimize(out.labels.data());
+    benchmark::ClobberMemory();
+  }
+  state.counters["points"] = static_cast<double>(view.size());
+  state.counters["obstacle_fraction"] =
+      static_cast<double>(out.count(kLabelObstacle)) / std::max<std::size_t>(1, view.size());
+}
+
+void BM_Kitti(benchmark::State& state, const std::string& file, bool thesis) {
+  PackedCloud cloud;
+  std::string error;
+  if (!readKittiBin(kittiDir() + "/" + file, &cloud, &error)) {
+    state.SkipWithError(("KITTI data absent: " + error).c_str());
+    for (auto _ : state) {
+    }
+    return;
+  }
+  runClassify(state, cloud, SensorPose::fromHeight(1.73f),
+              thesis ? verticalScanThesisParams() : verticalScanDefaultParams());
+}
+
+void BM_SimulatedUrban(benchmark::State& state, bool thesis) {
+  static sim::SimulatedScan scan;
+  static bool made = false;
+  if (!made) {
+    sim::World world;
+    std::string error;
+    if (!sim::makeStandardWorld("urban", 1, &world, &error)) {
+      state.SkipWithError(error.c_str());
+      return;
+    }
+    Eigen::Isometry3d mount = Eigen::Isometry3d::Identity();
+    mount.translation().z() = 1.73;
+    sim::simulateVelodyneRevolution(world, world.drivePose(0.5 * world.driveDuration()) * mount,
+                                    sim::VelodyneModel::hdl64e(sim::NoiseProfile::kDatasheet), 7,
+                                    &scan);
+    made = true;
+  }
+  runClassify(state, scan.cloud, SensorPose::fromHeight(1.73f),
+              thesis ? verticalScanThesisParams() : verticalScanDefaultParams());
+}
+
+int callgrindOnce(const std::string& path, bool thesis) {
+  PackedCloud cloud;
+  std::string error;
+  PointCloudView view;
+  if (!readKittiBin(path, &cloud, &error) || !cloud.view(&view, &error)) {
+    std::cerr << error << "\n";
+    return 1;
+  }
+  VerticalScanGround model(thesis ? verticalScanThesisParams() : verticalScanDefaultParams());
+  GroundClassification out;
+  CALLGRIND_START_INSTRUMENTATION;
+  model.classify(view, SensorPose::fromHeight(1.73f), &out);
+  CALLGRIND_STOP_INSTRUMENTATION;
+  std::cout << view.size() << " points, " << out.count(kLabelObstacle) << " obstacles\n";
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc >= 3 && std::strcmp(argv[1], "--callgrind-once") == 0) {
+    return callgrindOnce(argv[2], argc >= 4 && std::strcmp(argv[3], "--thesis") == 0);
+  }
+  for (const char* f : {"000000.bin", "000001.bin"}) {
+    benchmark::RegisterBenchmark((std::string("VerticalScan/kitti/") + f).c_str(),
+                                 [f](benchmark::State& s) { BM_Kitti(s, f, false); })
+        ->Unit(benchmark::kMillisecond);
+  }
+  benchmark::RegisterBenchmark("VerticalScanThesis/kitti/000000.bin",
+                               [](benchmark::State& s) { BM_Kitti(s, "000000.bin", true); })
+      ->Unit(benchmark::kMillisecond);
+  benchmark::RegisterBenchmark("VerticalScan/simulated_urban",
+                               [](benchmark::State& s) { BM_SimulatedUrban(s, false); })
+      ->Unit(benchmark::kMillisecond);
+  benchmark::RegisterBenchmark("VerticalScanThesis/simulated_urban",
+                               [](benchmark::State& s) { BM_SimulatedUrban(s, true); })
+      ->Unit(benchmark::kMillisecond);
+  benchmark::Initialize(&argc, argv);
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}

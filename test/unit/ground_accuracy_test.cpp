@@ -1,0 +1,76 @@
+// Accuracy of the vertical scan ground extraction on the simulator's worlds with ground truth
+// (realistic HDL-64E noise, the "datasheet" profile, 0.02 m), 3 revolutions along each world's
+// standard drive. The targets are ground precision and recall >= 99 % and obstacle
+// recall >= 97 % per world. Where the model reaches a target the test asserts the target;
+// where it does not yet (urban: curb faces and the low parts of walls and cars seen at grazing
+// incidence; potholes: shallow bowl edges; obstacle recall on the hillside's poles and car),
+// it asserts the level measured when the test was written, so a regression fails, and the gap
+// is reported in the ground_eval table rather than hidden.
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "ladar_perception/ground/ground_evaluation.h"
+#include "ladar_perception/ground/vertical_scan.h"
+
+using namespace ladar_perception;
+
+namespace {
+
+struct Expectation {
+  const char* world;
+  double ground_precision, ground_recall, obstacle_recall;
+};
+
+GroundAccuracy evaluate(const std::string& world, const VerticalScanParams& params) {
+  VerticalScanGround model(params);
+  GroundAccuracy acc;
+  std::string error;
+  EXPECT_TRUE(evaluateGroundModel(world, &model, sim::NoiseProfile::kDatasheet, 3, 1, &acc, &error))
+      << error;
+  return acc;
+}
+
+class GroundAccuracyTest : public ::testing::TestWithParam<Expectation> {};
+
+TEST_P(GroundAccuracyTest, DefaultModelPerWorld) {
+  const Expectation e = GetParam();
+  const GroundAccuracy acc = evaluate(e.world, verticalScanDefaultParams());
+  ASSERT_GT(acc.points, 100000u);
+  EXPECT_GE(acc.groundPrecision(), e.ground_precision) << e.world;
+  EXPECT_GE(acc.groundRecall(), e.ground_recall) << e.world;
+  EXPECT_GE(acc.obstacleRecall(), e.obstacle_recall) << e.world;
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Worlds, GroundAccuracyTest,
+    ::testing::Values(
+        // Targets met.
+        Expectation{"flat", 0.99, 0.99, 0.97},
+        // Ground targets met; obstacle recall (poles, the parked car) measured 93.5 %.
+        Expectation{"hillside", 0.99, 0.99, 0.92},
+        // Measured 94.7 % / 96.8 % / 92.3 %.
+        Expectation{"urban", 0.935, 0.955, 0.91},
+        // Ground targets met; pothole recall measured 58 %.
+        Expectation{"potholes", 0.99, 0.99, 0.55}),
+    [](const ::testing::TestParamInfo<Expectation>& info) { return std::string(info.param.world); });
+
+TEST(GroundAccuracy, DefaultBeatsThesisOnObstaclesAndKeepsTheGround) {
+  // Beyond the thesis: the bent, coupled line and the vertical-surface term find far more of
+  // the urban obstacles at a small cost in ground recall, and the thesis settings find no
+  // pothole at all.
+  const GroundAccuracy thesis = evaluate("urban", verticalScanThesisParams());
+  const GroundAccuracy fresh = evaluate("urban", verticalScanDefaultParams());
+  EXPECT_GT(fresh.obstacleRecall(), thesis.obstacleRecall() + 0.2);
+  EXPECT_GT(fresh.groundPrecision(), thesis.groundPrecision());
+  const GroundAccuracy thesis_holes = evaluate("potholes", verticalScanThesisParams());
+  const GroundAccuracy fresh_holes = evaluate("potholes", verticalScanDefaultParams());
+  EXPECT_GT(fresh_holes.obstacleRecall(), thesis_holes.obstacleRecall() + 0.3);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  testing::InitGoogleTest(&argc, argv);
+  return RUN_ALL_TESTS();
+}
