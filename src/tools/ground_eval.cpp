@@ -3,14 +3,21 @@
 //
 //   ground_eval [--worlds flat,urban,hillside,potholes] [--method NAME[,NAME]]
 //               [--noise datasheet|table4.1|none] [--scans N] [--seed S] [--classes]
+//               [--sick-scans N] [--markdown OUT]
+// By default every ground model (HDL-64E revolutions) on every standard world, then the vertical
+// SICK's ground fits (the Hough fit of 3.3.4 against the 1-DOF vertical scan line), with the
+// median core time per scan; --markdown also writes the table to OUT (for the README).
+#include <cstdarg>
 #include <cstdio>
 #include <cstdlib>
+#include <fstream>
 #include <iostream>
 #include <sstream>
 #include <string>
 #include <vector>
 
 #include "ladar_perception/ground/ground_evaluation.h"
+#include "ladar_perception/ground/hough_evaluation.h"
 #include "ladar_perception/ground/vertical_scan.h"
 #include "ladar_perception/io/image.h"
 
@@ -73,8 +80,10 @@ void writeErrorPng(const std::string& path, const std::string& world_name, Groun
 }
 
 int main(int argc, char** argv) {
-  std::vector<std::string> worlds = {"flat", "urban", "hillside", "potholes"};
-  std::vector<std::string> methods = {groundModelNames().front()};
+  std::vector<std::string> worlds = sim::standardWorldNames();
+  std::vector<std::string> methods = groundModelNames();
+  int sick_scans = 200;       // vertical SICK scans per world (0: no SICK rows)
+  std::string markdown_path;  // --markdown OUT: the table also written to OUT
   std::string noise_name = "datasheet";
   int scans = 10;
   uint32_t seed = 1;
@@ -97,9 +106,12 @@ int main(int argc, char** argv) {
     else if (a == "--classes") per_class = true;
     else if (a == "--set") sets.push_back(next());
     else if (a == "--png-errors") png_prefix = next();
+    else if (a == "--sick-scans") sick_scans = std::atoi(next().c_str());
+    else if (a == "--markdown") markdown_path = next();
     else {
       std::cerr << "usage: ground_eval [--worlds a,b] [--method m1,m2] "
-                   "[--noise datasheet|table4.1|none] [--scans N] [--seed S] [--classes] [--set key=value]...\n";
+                   "[--noise datasheet|table4.1|none] [--scans N] [--seed S] [--classes] [--set key=value]... "
+                   "[--sick-scans N] [--markdown OUT]\n";
       return a == "-h" || a == "--help" ? 0 : 2;
     }
   }
@@ -108,16 +120,40 @@ int main(int argc, char** argv) {
     std::cerr << "ground_eval: unknown noise profile " << noise_name << "\n";
     return 2;
   }
-  if (scans < 1) { std::cerr << "ground_eval: --scans must be >= 1\n"; return 2; }
-  std::printf("`%s`\n\n", cmdline.c_str());
-  std::printf("| world | method | noise | scans | points | ground precision | ground recall | obstacle recall |");
+  if (scans < 1 || sick_scans < 0) { std::cerr << "ground_eval: --scans must be >= 1, --sick-scans >= 0\n"; return 2; }
+  // The table goes to stdout and, with --markdown, into `markdown` for OUT.
+  std::string markdown;
+  auto emit = [&markdown](const char* fmt, ...) {
+    char buf[1024];
+    va_list args;
+    va_start(args, fmt);
+    std::vsnprintf(buf, sizeof(buf), fmt, args);
+    va_end(args);
+    markdown += buf;
+    std::fputs(buf, stdout);
+  };
+  emit("`%s`\n\n", cmdline.c_str());
+  emit("| world | method | noise | scans | points | ground precision | ground recall | obstacle recall | median ms/scan |");
   if (per_class) {
     for (int c = 0; c < sim::kNumSurfaceClasses; ++c)
-      std::printf(" %s |", sim::className(static_cast<sim::SurfaceClass>(c)));
+      emit(" %s |", sim::className(static_cast<sim::SurfaceClass>(c)));
   }
-  std::printf("\n|---|---|---|---|---|---|---|---|");
-  if (per_class) for (int c = 0; c < sim::kNumSurfaceClasses; ++c) std::printf("---|");
-  std::printf("\n");
+  emit("\n|---|---|---|---|---|---|---|---|---|");
+  if (per_class) for (int c = 0; c < sim::kNumSurfaceClasses; ++c) emit("---|");
+  emit("\n");
+  auto row = [&](const std::string& w, const std::string& name, const GroundAccuracy& acc, double ms) {
+    emit("| %s | %s | %s | %zu | %zu | %.2f%% | %.2f%% | %.2f%% | %.3f |", w.c_str(), name.c_str(),
+         noise_name.c_str(), acc.scans, acc.points, 100.0 * acc.groundPrecision(),
+         100.0 * acc.groundRecall(), 100.0 * acc.obstacleRecall(), ms);
+    if (per_class) {
+      for (int c = 0; c < sim::kNumSurfaceClasses; ++c) {
+        if (acc.class_points[c]) emit(" %.1f%% of %zu |", 100.0 * GroundAccuracy::ratio(acc.class_correct[c], acc.class_points[c]), acc.class_points[c]);
+        else emit(" - |");
+      }
+    }
+    emit("\n");
+    std::fflush(stdout);
+  };
   int status = 0;
   for (const std::string& m : methods) {
     std::string error;
@@ -137,26 +173,44 @@ int main(int argc, char** argv) {
       }
       vs->setParams(params);
     }
+    TimedGroundModel timed(model.get());
     for (const std::string& w : worlds) {
       GroundAccuracy acc;
-      if (!evaluateGroundModel(w, model.get(), noise, scans, seed, &acc, &error)) {
+      timed.reset();
+      if (!evaluateGroundModel(w, &timed, noise, scans, seed, &acc, &error)) {
         std::cerr << "ground_eval: " << w << ": " << error << "\n";
         status = 1;
         continue;
       }
+      const double ms = medianMs(timed.milliseconds());
       if (!png_prefix.empty()) writeErrorPng(png_prefix + "_" + w + ".png", w, model.get(), noise, scans, seed);
-      std::printf("| %s | %s | %s | %zu | %zu | %.2f%% | %.2f%% | %.2f%% |", w.c_str(),
-                  model->name().c_str(), noise_name.c_str(), acc.scans, acc.points,
-                  100.0 * acc.groundPrecision(), 100.0 * acc.groundRecall(),
-                  100.0 * acc.obstacleRecall());
-      if (per_class) {
-        for (int c = 0; c < sim::kNumSurfaceClasses; ++c) {
-          if (acc.class_points[c]) std::printf(" %.1f%% of %zu |", 100.0 * GroundAccuracy::ratio(acc.class_correct[c], acc.class_points[c]), acc.class_points[c]);
-          else std::printf(" - |");
+      row(w, model->name(), acc, ms);
+    }
+  }
+  // The vertical SICK (thesis 3.3.4): the Hough fit against the 1-DOF vertical scan line.
+  if (sick_scans > 0) {
+    for (const std::string& w : worlds) {
+      for (SickGroundFit fit : {SickGroundFit::kHough, SickGroundFit::kHoughThesis, SickGroundFit::kOneDof}) {
+        GroundAccuracy acc;
+        std::vector<double> ms;
+        std::string error;
+        if (!evaluateVerticalSick(w, fit, noise, sick_scans, seed, &acc, &ms, &error)) {
+          std::cerr << "ground_eval: " << w << ": " << error << "\n";
+          status = 1;
+          continue;
         }
+        row(w, sickGroundFitName(fit), acc, medianMs(ms));
       }
-      std::printf("\n");
-      std::fflush(stdout);
+    }
+  }
+  if (!markdown_path.empty()) {
+    const std::string tmp = markdown_path + ".tmp";
+    std::ofstream f(tmp);
+    f << markdown;
+    f.close();
+    if (!f || std::rename(tmp.c_str(), markdown_path.c_str()) != 0) {
+      std::cerr << "ground_eval: cannot write " << markdown_path << "\n";
+      return 1;
     }
   }
   return status;
