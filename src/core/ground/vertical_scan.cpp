@@ -350,7 +350,7 @@ void VerticalScanGround::binPoints(const PointCloudView& view, const SensorPose&
   const Eigen::Matrix3f R = pose.sensor_to_ground.linear();
   const Eigen::Vector3f t = pose.sensor_to_ground.translation();
   const int rows = rows_;
-  const ElevationRowTable row_table = row_table_;  // a local copy: no reloads after stores
+  const ElevationRowTable& row_table = row_table_;
   const float* __restrict atan_lut = atan_lut_.data();
   const float quarter = 0.25f * static_cast<float>(columns_);
   const float max_c = static_cast<float>(columns_) - 0.5f;
@@ -594,6 +594,12 @@ void VerticalScanGround::fitColumns() {
       float* dst = &coupled_[static_cast<std::size_t>(c) * K];
       dst[0] = 0.f;
       for (int k = 1; k < K; ++k) {
+        // A knot within half a metre of the column's own ground return keeps its height.
+        const std::size_t own = static_cast<std::size_t>(c) * K + k;
+        if (knot_support_[own] >= 0.66f) {
+          dst[k] = knot_height_[own];
+          continue;
+        }
         float sw = 0.f, swh = 0.f;
         for (int j = -R; j <= R; ++j) {
           const int cc = (c + j + columns_) % columns_;
