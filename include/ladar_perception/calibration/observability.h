@@ -16,7 +16,7 @@ namespace calibration {
 
 struct ObservabilityParams {
   // A direction whose curvature is below this fraction of the largest is weak.
-  double relative_threshold = 1e-3;
+  double relative_threshold = 0.006;
   // A direction whose predicted standard deviation sqrt(sigma^2 / (N * curvature)) exceeds this
   // is weak too [m; rotations in metres at the lever arm].
   double max_stddev = 0.05;
