@@ -1,5 +1,6 @@
 #include "ladar_perception/ros/vertical_scan_ground_ros.h"
 
+#include <algorithm>
 #include <exception>
 #include <sstream>
 
@@ -82,6 +83,13 @@ VerticalScanGroundRos::VerticalScanGroundRos(ros::NodeHandle nh, ros::NodeHandle
     }
   });
 
+  // The thresholds given explicitly at start-up, noted before the dynamic_reconfigure server
+  // writes every parameter to the server.
+  for (const auto& param : VerticalScanGroundConfig::__getParamDescriptions__()) {
+    if (param->name != "method" && private_nh_.hasParam(param->name)) {
+      explicit_params_.push_back(param->name);
+    }
+  }
   reconfigure_server_.reset(new dynamic_reconfigure::Server<VerticalScanGroundConfig>(private_nh_));
   reconfigure_server_->setCallback(
       [this](VerticalScanGroundConfig& config, uint32_t level) { reconfigure(config, level); });
@@ -125,7 +133,8 @@ void VerticalScanGroundRos::reconfigure(VerticalScanGroundConfig& config, uint32
     // Start-up: the method's settings, except thresholds given explicitly as parameters.
     loadMethodSettings(config.method, &config);
     for (const auto& param : VerticalScanGroundConfig::__getParamDescriptions__()) {
-      if (param->name != "method" && private_nh_.hasParam(param->name)) {
+      if (std::find(explicit_params_.begin(), explicit_params_.end(), param->name) !=
+          explicit_params_.end()) {
         param->fromServer(private_nh_, config);
       }
     }
@@ -133,6 +142,20 @@ void VerticalScanGroundRos::reconfigure(VerticalScanGroundConfig& config, uint32
   last_method_ = config.method;
   config_ = config;
   config_changed_ = true;
+}
+
+std::unique_ptr<GroundModel> VerticalScanGroundRos::makeModel(const VerticalScanGroundConfig& config) {
+  if (config.method == "default" || config.method == "thesis") {
+    return makeVerticalScanModel(toVerticalScanParams(config));
+  }
+  // The thesis's baselines and the per-column Hough fit, with their own settings.
+  std::string error;
+  std::unique_ptr<GroundModel> model = makeGroundModel(config.method, &error);
+  if (!model) {
+    reportError("bad parameter", error + "; using the default method");
+    model = makeVerticalScanModel(verticalScanDefaultParams());
+  }
+  return model;
 }
 
 void VerticalScanGroundRos::reportError(const std::string& kind, const std::string& detail) {
@@ -207,7 +230,7 @@ void VerticalScanGroundRos::process(const sensor_msgs::PointCloud2ConstPtr& msg)
   {
     std::lock_guard<std::mutex> lock(config_mutex_);
     if (config_changed_ || !model_) {
-      model_ = makeVerticalScanModel(toVerticalScanParams(config_));
+      model_ = makeModel(config_);
       sensor_height_ = static_cast<float>(config_.sensor_height);
       config_changed_ = false;
     }

@@ -8,6 +8,7 @@
 #include <memory>
 #include <mutex>
 #include <string>
+#include <vector>
 
 #include <diagnostic_updater/diagnostic_updater.h>
 #include <diagnostic_updater/update_functions.h>
@@ -53,6 +54,7 @@ class VerticalScanGroundRos {
   void reconfigure(VerticalScanGroundConfig& config, uint32_t level);
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status);
   void reportError(const std::string& kind, const std::string& detail);
+  std::unique_ptr<GroundModel> makeModel(const VerticalScanGroundConfig& config);
 
   ros::NodeHandle nh_;
   ros::NodeHandle private_nh_;
@@ -67,6 +69,7 @@ class VerticalScanGroundRos {
   bool config_changed_ = true;
   std::unique_ptr<dynamic_reconfigure::Server<VerticalScanGroundConfig>> reconfigure_server_;
   std::string last_method_;
+  std::vector<std::string> explicit_params_;
 
   // Touched only by the processing callback (serialised by process_mutex_).
   std::mutex process_mutex_;
