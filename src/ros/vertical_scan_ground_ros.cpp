@@ -25,12 +25,24 @@ VerticalScanParams toVerticalScanParams(const VerticalScanGroundConfig& c) {
   p.tolerances.slope_error_max_base = static_cast<float>(c.slope_error_max_base);
   p.tolerances.slope_error_max_per_m = static_cast<float>(c.slope_error_max_per_m);
   p.tolerances.obstacle_threshold = static_cast<float>(c.obstacle_threshold);
-  p.bend_ground_line = c.bend_ground_line;
   p.segment_length = static_cast<float>(c.segment_length);
+  p.track_max_step = static_cast<float>(c.track_max_step);
+  p.track_max_drop = static_cast<float>(c.track_max_drop);
+  p.track_tolerance_per_m = static_cast<float>(c.track_tolerance_per_m);
+  p.track_max_local_slope = static_cast<float>(c.track_max_local_slope);
+  p.track_min_local_slope = static_cast<float>(c.track_min_local_slope);
+  p.track_anchor_distance = static_cast<float>(c.track_anchor_distance);
+  p.track_max_bend = static_cast<float>(c.track_max_bend);
+  p.track_recover_distance = static_cast<float>(c.track_recover_distance);
+  p.negative_gnd_error_max = static_cast<float>(c.negative_gnd_error_max);
+  p.vertical_gnd_error_max = static_cast<float>(c.vertical_gnd_error_max);
+  p.vertical_slope_max = static_cast<float>(c.vertical_slope_max);
+  p.bend_ground_line = c.bend_ground_line;
   p.couple_columns = c.couple_columns;
+  p.negative_obstacles = c.negative_obstacles;
+  p.vertical_surfaces = c.vertical_surfaces;
   p.coupling_radius = c.coupling_radius;
   p.min_ground_returns = c.min_ground_returns;
-  p.negative_obstacles = c.negative_obstacles;
   return p;
 }
 
@@ -49,12 +61,24 @@ void loadMethodSettings(const std::string& method, VerticalScanGroundConfig* c) 
   c->slope_error_max_base = p.tolerances.slope_error_max_base;
   c->slope_error_max_per_m = p.tolerances.slope_error_max_per_m;
   c->obstacle_threshold = p.tolerances.obstacle_threshold;
-  c->bend_ground_line = p.bend_ground_line;
   c->segment_length = p.segment_length;
+  c->track_max_step = p.track_max_step;
+  c->track_max_drop = p.track_max_drop;
+  c->track_tolerance_per_m = p.track_tolerance_per_m;
+  c->track_max_local_slope = p.track_max_local_slope;
+  c->track_min_local_slope = p.track_min_local_slope;
+  c->track_anchor_distance = p.track_anchor_distance;
+  c->track_max_bend = p.track_max_bend;
+  c->track_recover_distance = p.track_recover_distance;
+  c->negative_gnd_error_max = p.negative_gnd_error_max;
+  c->vertical_gnd_error_max = p.vertical_gnd_error_max;
+  c->vertical_slope_max = p.vertical_slope_max;
+  c->bend_ground_line = p.bend_ground_line;
   c->couple_columns = p.couple_columns;
+  c->negative_obstacles = p.negative_obstacles;
+  c->vertical_surfaces = p.vertical_surfaces;
   c->coupling_radius = p.coupling_radius;
   c->min_ground_returns = p.min_ground_returns;
-  c->negative_obstacles = p.negative_obstacles;
 }
 
 VerticalScanGroundRos::VerticalScanGroundRos(ros::NodeHandle nh, ros::NodeHandle private_nh)
