@@ -2,7 +2,7 @@
 // TransformStamped-shaped YAML dict (header.frame_id, child_frame_id, transform.translation,
 // transform.rotation), the form tf2_ros's static_transform_publisher reads from a single
 // parameter name. The launch files set that parameter with
-//   <param name="..." type="yaml" command="rosrun ladar_perception sensor_transforms SENSORS NAME"/>
+//   <param name="..." type="yaml" command="$(find ladar_perception)/scripts/sensor_transforms_param SENSORS NAME"/>
 // so config/sensors.yaml stays the one source of the numbers (the simulator reads the same file
 // through the same parser, sim::loadSensorRig).
 #include <cstdio>
