@@ -231,8 +231,7 @@ class VerticalScanGround : public GroundModel {
   ScratchBuffer<float> height_;   // height per input point (ground frame)
   ScratchBuffer<uint32_t> bin_;   // bin per input point, kInvalidBin for unknown
   std::vector<uint32_t> bin_start_;   // counting sort of points by bin
-  ScratchBuffer<uint32_t> order_;
-  ScratchBuffer<float> order_r_;
+  ScratchBuffer<uint64_t> order_;  // valid points by bin, each as rangeKey(r, index)
   std::vector<float> atan_lut_;   // atan(t), t in [0, 1], in column units
   std::vector<float> col_r_, col_h_, col_w_;   // one column's representatives
   std::vector<float> knot_height_;             // columns_ x knots_
@@ -242,7 +241,6 @@ class VerticalScanGround : public GroundModel {
   std::vector<float> column_slope_;            // straight estimate per column
   std::vector<int> column_support_;
   std::vector<int> column_count_;
-  std::vector<std::pair<float, uint32_t>> median_scratch_;
 };
 
 }  // namespace ladar_perception

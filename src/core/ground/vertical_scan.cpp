@@ -18,6 +18,28 @@ constexpr int kMaxRingRows = 128;   // rows of the bin grid when the cloud carri
 constexpr float kMinR = 0.05f;      // horizontal distance floor for Height / r [m]
 constexpr int kAtanCells = 2048;    // atan LUT cells on [0, 1]: < 0.015 deg error
 
+// Sorts keys ascending (small arrays: a bin's points, one column's representatives).
+template <typename K>
+inline void insertionSort(K* keys, int n) {
+  for (int i = 1; i < n; ++i) {
+    const K k = keys[i];
+    int j = i - 1;
+    while (j >= 0 && keys[j] > k) {
+      keys[j + 1] = keys[j];
+      --j;
+    }
+    keys[j + 1] = k;
+  }
+}
+
+// A point's sort key within its bin: the bits of r > 0 (which order like the floats) above the
+// point index, so one integer comparison orders by r and then by input order.
+inline uint64_t rangeKey(float r, uint32_t index) {
+  uint32_t bits;
+  std::memcpy(&bits, &r, 4);
+  return (static_cast<uint64_t>(bits) << 32) | index;
+}
+
 // Sorts keys ascending and permutes vals alike (small, nearly sorted arrays).
 template <typename V>
 inline void insertionSort(float* keys, V* vals, int n) {
@@ -443,9 +465,12 @@ void VerticalScanGround::classify(const PointCloudView& view, const SensorPose& 
   height_.resize(n);
   bin_.resize(n);
   bin_start_.assign(bins + 1, 0);
-  std::fill(knot_height_.begin(), knot_height_.end(), 0.f);
-  std::fill(knot_support_.begin(), knot_support_.end(), 0.f);
-  if (n == 0) return;
+  if (n == 0) {
+    // fitColumns() writes every knot; an empty scan leaves flat ground lines.
+    std::fill(knot_height_.begin(), knot_height_.end(), 0.f);
+    std::fill(knot_support_.begin(), knot_support_.end(), 0.f);
+    return;
+  }
 
   const Eigen::Matrix3f R = pose.sensor_to_ground.linear();
   const Eigen::Vector3f t = pose.sensor_to_ground.translation();
@@ -475,15 +500,12 @@ void VerticalScanGround::classify(const PointCloudView& view, const SensorPose& 
   }
   bin_start_[bins] = acc;
   order_.resize(acc);
-  order_r_.resize(acc);
   {
     // Scatter; bin_start_[b] advances to the end of bin b, i.e. the start of bin b + 1.
     for (std::size_t i = 0; i < n; ++i) {
       const uint32_t b = bin_[i];
       if (b == kInvalidBin) continue;
-      const uint32_t pos = bin_start_[b]++;
-      order_[pos] = static_cast<uint32_t>(i);
-      order_r_[pos] = r_[i];
+      order_[bin_start_[b]++] = rangeKey(r_[i], static_cast<uint32_t>(i));
     }
     // Shift back: bin b spans [bin_start_[b-1], bin_start_[b]) now; restore starts.
     for (std::size_t b = bins; b > 0; --b) bin_start_[b] = bin_start_[b - 1];
@@ -517,21 +539,16 @@ void VerticalScanGround::fitColumns() {
       const uint32_t end = bin_start_[b + 1];
       if (begin == end) continue;
       const int cnt = static_cast<int>(end - begin);
-      uint32_t rep;
-      if (cnt <= 2) {
-        rep = order_[begin];  // lower median of 1 or 2
-        if (cnt == 2 && order_r_[begin + 1] < order_r_[begin]) rep = order_[begin + 1];
-      } else if (cnt <= 48) {
-        insertionSort(&order_r_[begin], &order_[begin], cnt);
-        rep = order_[begin + (cnt - 1) / 2];
+      // The lower median by (r, input order) of the bin's keys.
+      uint64_t* keys = &order_[begin];
+      const int mid = (cnt - 1) / 2;
+      if (cnt <= 48) {
+        insertionSort(keys, cnt);
       } else {
         // Large bins (slow spin, duplicated points): partial selection.
-        std::vector<std::pair<float, uint32_t>>& tmp = median_scratch_;
-        tmp.resize(cnt);
-        for (int j = 0; j < cnt; ++j) tmp[j] = {order_r_[begin + j], order_[begin + j]};
-        std::nth_element(tmp.begin(), tmp.begin() + (cnt - 1) / 2, tmp.end());
-        rep = tmp[(cnt - 1) / 2].second;
+        std::nth_element(keys, keys + mid, keys + cnt);
       }
+      const uint32_t rep = static_cast<uint32_t>(keys[mid]);
       cr[m] = r_[rep];
       ch[m] = height_[rep];
       rep_r_[b] = r_[rep];
@@ -590,7 +607,18 @@ void VerticalScanGround::fitColumns() {
   if (p.couple_columns && p.bend_ground_line && p.coupling_radius > 0) {
     coupled_.resize(knot_height_.size());
     const int R = p.coupling_radius;
+    // The kernel 1 / (1 + |j|) and the neighbour columns' knot rows (wrapping around).
+    float kernel[2 * 64 + 1];
+    const float* nb_height[2 * 64 + 1];
+    const float* nb_support[2 * 64 + 1];
+    const int RR = std::min(R, 64);
+    for (int j = -RR; j <= RR; ++j) kernel[j + RR] = 1.f / (1.f + static_cast<float>(std::abs(j)));
     for (int c = 0; c < columns_; ++c) {
+      for (int j = -RR; j <= RR; ++j) {
+        const int cc = ((c + j) % columns_ + columns_) % columns_;
+        nb_height[j + RR] = &knot_height_[static_cast<std::size_t>(cc) * K];
+        nb_support[j + RR] = &knot_support_[static_cast<std::size_t>(cc) * K];
+      }
       float* dst = &coupled_[static_cast<std::size_t>(c) * K];
       dst[0] = 0.f;
       for (int k = 1; k < K; ++k) {
@@ -601,12 +629,10 @@ void VerticalScanGround::fitColumns() {
           continue;
         }
         float sw = 0.f, swh = 0.f;
-        for (int j = -R; j <= R; ++j) {
-          const int cc = (c + j + columns_) % columns_;
-          const float w = (knot_support_[static_cast<std::size_t>(cc) * K + k] + 1e-3f) /
-                          (1.f + static_cast<float>(std::abs(j)));
+        for (int j = 0; j <= 2 * RR; ++j) {
+          const float w = (nb_support[j][k] + 1e-3f) * kernel[j];
           sw += w;
-          swh += w * knot_height_[static_cast<std::size_t>(cc) * K + k];
+          swh += w * nb_height[j][k];
         }
         dst[k] = swh / sw;
       }
