@@ -15,6 +15,9 @@ namespace calibration {
 // method) go into comments so that the parameter stays exactly a TransformStamped.
 std::string staticTransformYaml(const std::string& parent_frame, const std::string& child_frame,
                                 const CalibrationResult& result);
+// Writes the YAML atomically (a temporary file renamed over `path`: a kill at any moment leaves
+// either the previous file or the new one, never a partial one). A previous file is kept first
+// as `path`.YYYYMMDDTHHMMSSZ.bak (UTC; -N appended if that name exists).
 bool writeStaticTransformYaml(const std::string& path, const std::string& parent_frame,
                               const std::string& child_frame, const CalibrationResult& result,
                               std::string* error);
@@ -22,7 +25,10 @@ bool writeStaticTransformYaml(const std::string& path, const std::string& parent
 std::string staticTransformLaunchLine(const std::string& yaml_path,
                                       const std::string& parent_frame,
                                       const std::string& child_frame);
-// Writes `text` to `path` atomically.
+// Keeps an existing `path` as `path`.YYYYMMDDTHHMMSSZ.bak (its name in *backup; empty when
+// there was no file). False with a reason when the backup cannot be made.
+bool backupExistingFile(const std::string& path, std::string* backup, std::string* error);
+// Writes `text` to `path` atomically (temporary file, fsync, rename).
 bool writeFileAtomically(const std::string& path, const std::string& text, std::string* error);
 
 }  // namespace calibration

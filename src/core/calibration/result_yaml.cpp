@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <ctime>
 #include <sstream>
 
 namespace ladar_perception {
@@ -91,9 +92,43 @@ bool writeFileAtomically(const std::string& path, const std::string& text, std::
   return true;
 }
 
+bool backupExistingFile(const std::string& path, std::string* backup, std::string* error) {
+  if (backup) backup->clear();
+  if (::access(path.c_str(), F_OK) != 0) return true;  // nothing to keep
+  char stamp[32];
+  const std::time_t now = std::time(nullptr);
+  std::tm utc{};
+  gmtime_r(&now, &utc);
+  std::strftime(stamp, sizeof(stamp), "%Y%m%dT%H%M%SZ", &utc);
+  for (int k = 0; k < 1000; ++k) {
+    const std::string name = path + "." + stamp + (k ? "-" + std::to_string(k) : "") + ".bak";
+    // A hard link keeps the previous file's bytes under the new name at once, without a copy
+    // that a kill could leave half-written; the original stays in place until the rename.
+    if (::link(path.c_str(), name.c_str()) == 0) {
+      if (backup) *backup = name;
+      return true;
+    }
+    if (errno == EEXIST) continue;
+    // No hard links on this file system: copy, atomically too.
+    std::FILE* in = std::fopen(path.c_str(), "rb");
+    if (!in) break;
+    std::string text;
+    char buf[4096];
+    std::size_t n;
+    while ((n = std::fread(buf, 1, sizeof(buf), in)) > 0) text.append(buf, n);
+    std::fclose(in);
+    if (!writeFileAtomically(name, text, error)) return false;
+    if (backup) *backup = name;
+    return true;
+  }
+  if (error) *error = "cannot keep a backup of " + path + ": " + std::strerror(errno);
+  return false;
+}
+
 bool writeStaticTransformYaml(const std::string& path, const std::string& parent_frame,
                               const std::string& child_frame, const CalibrationResult& result,
                               std::string* error) {
+  if (!backupExistingFile(path, nullptr, error)) return false;
   return writeFileAtomically(path, staticTransformYaml(parent_frame, child_frame, result), error);
 }
 

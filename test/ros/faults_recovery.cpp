@@ -1,0 +1,271 @@
+// rostest: faults around the perception nodelets, each with a clear answer and no hang.
+//  - tf late (the scan waits in the tf filter and is processed when its transform arrives),
+//    never (the scan is dropped and counted as missing tf), and jumping back in time (a bag
+//    that loops: old scans are dropped and counted, new ones are processed again);
+//  - the nodelet manager restarted in the middle of a stream: outputs resume;
+//  - the calibration service called with no data, with too little data, with an initial guess
+//    far outside the search region or not a rotation: an answer within a time limit.
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <functional>
+#include <future>
+#include <memory>
+#include <thread>
+
+#include <geometry_msgs/TransformStamped.h>
+#include <nodelet/loader.h>
+#include <ros/ros.h>
+#include <sensor_msgs/PointCloud2.h>
+#include <tf2_ros/static_transform_broadcaster.h>
+#include <tf2_ros/transform_broadcaster.h>
+
+#include "ladar_perception/Calibrate.h"
+#include "ladar_perception/cloud/point_cloud_view.h"
+#include "ladar_perception/ros/calibration_ros.h"
+#include "ladar_perception/ros/cloud_conversion.h"
+#include "ladar_perception/ros/vertical_scan_ground_ros.h"
+
+namespace lp = ladar_perception;
+
+namespace {
+
+bool waitFor(const std::function<bool()>& done, double seconds = 30.0) {
+  const ros::WallTime end = ros::WallTime::now() + ros::WallDuration(seconds);
+  while (ros::ok() && ros::WallTime::now() < end) {
+    if (done()) return true;
+    ros::WallDuration(0.002).sleep();
+  }
+  return done();
+}
+
+struct Counter {
+  std::atomic<int> count{0};
+  void callback(const sensor_msgs::PointCloud2ConstPtr&) { ++count; }
+};
+
+lp::PackedCloud flatCloud(int n) {
+  lp::PackedCloud c;
+  c.layout = lp::velodyneXYZIRTLayout(static_cast<uint32_t>(n));
+  c.data.assign(static_cast<std::size_t>(c.layout.row_step) * c.layout.height, 0);
+  const lp::CloudLayout& L = c.layout;
+  for (int i = 0; i < n; ++i) {
+    const int ring = i % 16;
+    const double elev = (-20.0 + ring) * M_PI / 180.0;
+    const double az = (i / 16) * 2.0 * M_PI / std::max(1, n / 16);
+    const double range = 1.8 / std::sin(-elev);
+    uint8_t* p = c.data.data() + static_cast<std::size_t>(i) * L.point_step;
+    lp::writeField(p, *lp::findField(L, "x"), range * std::cos(elev) * std::cos(az));
+    lp::writeField(p, *lp::findField(L, "y"), range * std::cos(elev) * std::sin(az));
+    lp::writeField(p, *lp::findField(L, "z"), range * std::sin(elev));
+    lp::writeField(p, *lp::findField(L, "ring"), ring);
+  }
+  return c;
+}
+
+sensor_msgs::PointCloud2ConstPtr cloudMsg(const lp::PackedCloud& c, const std::string& frame,
+                                          ros::Time stamp) {
+  sensor_msgs::PointCloud2Ptr m = lp::toMessage(c);
+  m->header.frame_id = frame;
+  m->header.stamp = stamp;
+  return m;
+}
+
+geometry_msgs::TransformStamped transform(const std::string& parent, const std::string& child,
+                                          double z, ros::Time stamp) {
+  geometry_msgs::TransformStamped t;
+  t.header.stamp = stamp;
+  t.header.frame_id = parent;
+  t.child_frame_id = child;
+  t.transform.translation.z = z;
+  t.transform.rotation.w = 1.0;
+  return t;
+}
+
+class Faults : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    static tf2_ros::StaticTransformBroadcaster statics;
+    statics.sendTransform({transform("base_footprint", "velodyne", 1.8, ros::Time::now()),
+                           transform("odom", "base_link", 0.0, ros::Time::now()),
+                           transform("base_link", "velodyne_ref", 1.8, ros::Time::now()),
+                           transform("base_link", "velodyne_target", 1.9, ros::Time::now())});
+    static ros::AsyncSpinner spinner(4);
+    spinner.start();
+  }
+};
+
+TEST_F(Faults, TfLateNeverAndJumpingBack) {
+  ros::NodeHandle nh("tf_faults"), pnh("tf_faults_private");
+  pnh.setParam("queue_size", 3);
+  lp::VerticalScanGroundRos adapter(nh, pnh);
+  Counter classified;
+  ros::Subscriber sub = nh.subscribe("classified", 100, &Counter::callback, &classified);
+  ros::Publisher pub = nh.advertise<sensor_msgs::PointCloud2>("points", 100);
+  tf2_ros::TransformBroadcaster tf;
+  ASSERT_TRUE(waitFor([&] { return pub.getNumSubscribers() > 0; }));
+  const lp::PackedCloud cloud = flatCloud(1600);
+
+  // Late: the scan arrives before any transform of its (moving) frame; it waits in the tf
+  // filter and is processed once the transform around its stamp arrives.
+  const ros::Time t = ros::Time::now();
+  pub.publish(cloudMsg(cloud, "velodyne_moving", t));
+  EXPECT_FALSE(waitFor([&] { return classified.count > 0; }, 0.5));
+  tf.sendTransform(transform("base_footprint", "velodyne_moving", 1.8, t - ros::Duration(0.05)));
+  tf.sendTransform(transform("base_footprint", "velodyne_moving", 1.8, t + ros::Duration(0.05)));
+  ASSERT_TRUE(waitFor([&] { return classified.count == 1; })) << "the late scan was lost";
+  EXPECT_EQ(adapter.health().errorCount("missing tf"), 0u);
+
+  // Never: scans of a frame nobody publishes are dropped (pushed out of the filter's queue of
+  // 3) and counted, and the nodelet goes on with valid scans.
+  for (int i = 0; i < 10; ++i) {
+    pub.publish(cloudMsg(cloud, "never_published", t + ros::Duration(0.1 * i)));
+  }
+  EXPECT_TRUE(waitFor([&] { return adapter.health().errorCount("missing tf") >= 7u; }))
+      << adapter.health().errorCount("missing tf");
+  pub.publish(cloudMsg(cloud, "velodyne", ros::Time::now()));
+  ASSERT_TRUE(waitFor([&] { return classified.count == 2; }));
+
+  // Jumping back in time (a bag looping): transforms and scans a minute older than the buffer's
+  // latest. tf2 ignores or accepts the old transforms; either way every scan gets an answer
+  // (processed, or dropped and counted) and fresh scans are processed afterwards.
+  const ros::Time back = t - ros::Duration(60.0);
+  const uint64_t missing_before = adapter.health().errorCount("missing tf");
+  for (int i = 0; i < 5; ++i) {
+    const ros::Time s = back + ros::Duration(0.1 * i);
+    tf.sendTransform(transform("base_footprint", "velodyne_moving", 1.8, s - ros::Duration(0.05)));
+    tf.sendTransform(transform("base_footprint", "velodyne_moving", 1.8, s + ros::Duration(0.05)));
+    pub.publish(cloudMsg(cloud, "velodyne_moving", s));
+  }
+  // Push any scan still waiting out of the filter's queue with scans of an absent frame.
+  for (int i = 0; i < 4; ++i) pub.publish(cloudMsg(cloud, "never_published", back));
+  EXPECT_TRUE(waitFor([&] {
+    return static_cast<uint64_t>(classified.count - 2) +
+               (adapter.health().errorCount("missing tf") - missing_before) >= 5u;
+  })) << classified.count << " processed, "
+      << adapter.health().errorCount("missing tf") - missing_before << " dropped";
+  const int before = classified.count;
+  const ros::Time fresh = ros::Time::now();
+  tf.sendTransform(transform("base_footprint", "velodyne_moving", 1.8, fresh - ros::Duration(0.05)));
+  tf.sendTransform(transform("base_footprint", "velodyne_moving", 1.8, fresh + ros::Duration(0.05)));
+  pub.publish(cloudMsg(cloud, "velodyne_moving", fresh));
+  pub.publish(cloudMsg(cloud, "velodyne", fresh));
+  EXPECT_TRUE(waitFor([&] { return classified.count >= before + 2; }));
+}
+
+TEST_F(Faults, ManagerRestartedMidStream) {
+  ros::NodeHandle nh;
+  Counter classified;
+  ros::Subscriber sub = nh.subscribe("/restart/classified", 100, &Counter::callback, &classified);
+  ros::Publisher pub = nh.advertise<sensor_msgs::PointCloud2>("/restart/points", 10);
+  const lp::PackedCloud cloud = flatCloud(1600);
+  // The bag keeps playing at 20 Hz while the manager goes down and comes back.
+  std::atomic<bool> playing{true};
+  std::thread player([&] {
+    ros::WallRate rate(20.0);
+    while (playing && ros::ok()) {
+      pub.publish(cloudMsg(cloud, "velodyne", ros::Time::now()));
+      rate.sleep();
+    }
+  });
+  nodelet::M_string remap;
+  remap["points"] = "/restart/points";
+  remap["classified"] = "/restart/classified";
+  remap["ground"] = "/restart/ground";
+  remap["obstacles"] = "/restart/obstacles";
+  for (int run = 0; run < 3; ++run) {
+    SCOPED_TRACE(run);
+    auto manager = std::make_unique<nodelet::Loader>(false);
+    ASSERT_TRUE(manager->load("/restart/vertical_scan_ground", "ladar_perception/VerticalScanGround",
+                              remap, nodelet::V_string()));
+    const int before = classified.count;
+    EXPECT_TRUE(waitFor([&] { return classified.count >= before + 5; }))
+        << "no output after (re)start " << run;
+    manager.reset();  // the manager goes down in the middle of the stream
+  }
+  playing = false;
+  player.join();
+}
+
+ladar_perception::Calibrate::Response callWithin(const std::string& service,
+                                                 ladar_perception::Calibrate::Request req,
+                                                 double seconds, bool* answered) {
+  auto f = std::async(std::launch::async, [service, req]() {
+    ladar_perception::Calibrate srv;
+    srv.request = req;
+    ros::service::call(service, srv);
+    return srv.response;
+  });
+  *answered = f.wait_for(std::chrono::duration<double>(seconds)) == std::future_status::ready;
+  return *answered ? f.get() : ladar_perception::Calibrate::Response();
+}
+
+TEST_F(Faults, CalibrationServiceAnswersEveryBadRequest) {
+  ros::NodeHandle nh("cal_faults"), pnh("cal_faults/calibration");
+  pnh.setParam("reference_frame", "velodyne_ref");
+  pnh.setParam("target_frame", "velodyne_target");
+  pnh.setParam("output_file", "/tmp/ladar_perception_faults_calibration.yaml");
+  lp::CalibrationRos adapter(nh, pnh);
+  const std::string service = "/cal_faults/calibration/calibrate";
+  ASSERT_TRUE(ros::service::waitForService(service, 30000));
+
+  // No data at all.
+  bool answered = false;
+  ladar_perception::Calibrate::Request req;
+  auto res = callWithin(service, req, 60.0, &answered);
+  ASSERT_TRUE(answered) << "no answer without data";
+  EXPECT_FALSE(res.success);
+  EXPECT_EQ(res.message.rfind("no data", 0), 0u) << res.message;
+
+  // Too little data: one scan of each sensor.
+  ros::Publisher ref = nh.advertise<sensor_msgs::PointCloud2>("reference", 10);
+  ros::Publisher tgt = nh.advertise<sensor_msgs::PointCloud2>("target", 10);
+  ASSERT_TRUE(waitFor([&] { return ref.getNumSubscribers() > 0 && tgt.getNumSubscribers() > 0; }));
+  const lp::PackedCloud cloud = flatCloud(800);
+  ref.publish(cloudMsg(cloud, "velodyne_ref", ros::Time::now()));
+  tgt.publish(cloudMsg(cloud, "velodyne_target", ros::Time::now()));
+  ASSERT_TRUE(waitFor([&] { return adapter.bufferedScans(false) == 1 && adapter.bufferedScans(true) == 1; }));
+  res = callWithin(service, req, 90.0, &answered);
+  ASSERT_TRUE(answered) << "no answer with one scan each";
+  EXPECT_FALSE(res.message.empty());
+  // A flat ground alone fixes z, roll and pitch only: whatever the verdict, the answer must
+  // say so rather than claim a full calibration.
+  if (res.success) EXPECT_FALSE(res.unobservable.empty()) << res.message;
+
+  // An initial guess that is not a rotation.
+  req.initial_guess.translation.x = 1.0;
+  req.initial_guess.rotation.x = std::nan("");
+  res = callWithin(service, req, 60.0, &answered);
+  ASSERT_TRUE(answered);
+  EXPECT_FALSE(res.success);
+  EXPECT_NE(res.message.find("rotation"), std::string::npos) << res.message;
+
+  // An initial guess a kilometre outside any plausible mount, with a tight search region.
+  req.initial_guess = geometry_msgs::Transform();
+  req.initial_guess.translation.x = 1000.0;
+  req.initial_guess.rotation.w = 1.0;
+  req.spread = {0.1, 0.1, 0.1, 0.01, 0.01, 0.01};
+  res = callWithin(service, req, 120.0, &answered);
+  ASSERT_TRUE(answered) << "no answer for a guess outside the search region";
+  EXPECT_FALSE(res.message.empty());
+
+  // A malformed spread.
+  req.spread = {1.0, 2.0};
+  res = callWithin(service, req, 60.0, &answered);
+  ASSERT_TRUE(answered);
+  EXPECT_FALSE(res.success);
+  EXPECT_NE(res.message.find("spread"), std::string::npos) << res.message;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  testing::InitGoogleTest(&argc, argv);
+  ros::init(argc, argv, "faults_recovery_test");
+  ros::NodeHandle nh;
+  const int rc = RUN_ALL_TESTS();
+  ros::shutdown();
+  return rc;
+}
