@@ -233,6 +233,7 @@ class VerticalScanGround : public GroundModel {
   std::vector<uint32_t> bin_start_;   // counting sort of points by bin
   ScratchBuffer<uint64_t> order_;  // valid points by bin, each as rangeKey(r, index)
   std::vector<float> atan_lut_;   // atan(t), t in [0, 1], in column units
+  float octant_offset_[8] = {}, octant_sign_[8] = {};  // atan2 = offset + sign * atan LUT
   std::vector<float> col_r_, col_h_, col_w_;   // one column's representatives
   std::vector<float> knot_height_;             // columns_ x knots_
   std::vector<float> knot_support_;            // columns_ x knots_

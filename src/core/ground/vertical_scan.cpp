@@ -18,7 +18,7 @@ constexpr int kMaxRingRows = 128;   // rows of the bin grid when the cloud carri
 constexpr float kMinR = 0.05f;      // horizontal distance floor for Height / r [m]
 constexpr int kAtanCells = 2048;    // atan LUT cells on [0, 1]: < 0.015 deg error
 
-// Sorts keys ascending (small arrays: a bin's points, one column's representatives).
+// Sorts keys ascending (small arrays: a bin's points).
 template <typename K>
 inline void insertionSort(K* keys, int n) {
   for (int i = 1; i < n; ++i) {
@@ -324,6 +324,17 @@ void VerticalScanGround::setParams(const VerticalScanParams& params) {
   for (int i = 0; i <= kAtanCells + 1; ++i) {
     atan_lut_[i] = std::atan(static_cast<float>(i) / kAtanCells) * inv_column_width_;
   }
+  // atan2(y, x) + pi = offset + sign * atan(min/max) per octant (steep: |y| > |x|; then the
+  // signs of x and y), in column units.
+  const float quarter = 0.25f * static_cast<float>(columns_);
+  for (int o = 0; o < 8; ++o) {
+    const bool o_steep = o & 1, o_neg_x = o & 2, o_neg_y = o & 4;
+    float offset = o_steep ? quarter : 0.f, sign = o_steep ? -1.f : 1.f;
+    if (o_neg_x) { offset = 2.f * quarter - offset; sign = -sign; }
+    if (o_neg_y) { offset = -offset; sign = -sign; }
+    octant_offset_[o] = offset + 2.f * quarter;
+    octant_sign_[o] = sign;
+  }
   if (p.bend_ground_line) {
     knots_ = static_cast<int>(std::ceil(p.max_range / p.segment_length)) + 2;
   } else {
@@ -343,12 +354,9 @@ inline float VerticalScanGround::columnCoordinate(float x, float y) const {
   const float mx = steep ? ay : ax;
   const float mn = steep ? ax : ay;
   const float t = mx > 0.f ? mn / mx : 0.f;
-  const float quarter = 0.25f * static_cast<float>(columns_);
-  float a = atan_lut_[static_cast<int>(t * kAtanCells + 0.5f)];
-  if (steep) a = quarter - a;
-  if (x < 0.f) a = 2.f * quarter - a;
-  if (y < 0.f) a = -a;
-  a += 2.f * quarter;
+  const int octant = (y < 0.f) << 2 | (x < 0.f) << 1 | steep;
+  const float a = octant_offset_[octant] +
+                  octant_sign_[octant] * atan_lut_[static_cast<int>(t * kAtanCells + 0.5f)];
   const float max_c = static_cast<float>(columns_) - 0.5f;
   return a < max_c ? a : max_c;
 }
@@ -374,8 +382,10 @@ void VerticalScanGround::binPoints(const PointCloudView& view, const SensorPose&
   const int rows = rows_;
   const ElevationRowTable& row_table = row_table_;
   const float* __restrict atan_lut = atan_lut_.data();
-  const float quarter = 0.25f * static_cast<float>(columns_);
   const float max_c = static_cast<float>(columns_) - 0.5f;
+  float octant_offset[8], octant_sign[8];  // local copies: the stores below cannot alias them
+  std::memcpy(octant_offset, octant_offset_, sizeof(octant_offset));
+  std::memcpy(octant_sign, octant_sign_, sizeof(octant_sign));
   const int shift = row_shift_;
   uint32_t* __restrict count = bin_start_.data() + 1;
   uint32_t* __restrict bins = bin_.data();
@@ -437,11 +447,9 @@ void VerticalScanGround::binPoints(const PointCloudView& view, const SensorPose&
     const float mx = steep ? ay : ax;
     const float mn = steep ? ax : ay;
     // mx is 0 for a point straight above or below the sensor (x = y = 0): column 0.
-    float a = atan_lut[static_cast<int>((mx > 0.f ? mn / mx : 0.f) * kAtanCells + 0.5f)];
-    a = steep ? quarter - a : a;
-    a = gx < 0.f ? 2.f * quarter - a : a;
-    a = gy < 0.f ? -a : a;
-    a += 2.f * quarter;
+    const float lut = atan_lut[static_cast<int>((mx > 0.f ? mn / mx : 0.f) * kAtanCells + 0.5f)];
+    const int octant = (gy < 0.f) << 2 | (gx < 0.f) << 1 | steep;
+    float a = octant_offset[octant] + octant_sign[octant] * lut;
     a = a < max_c ? a : max_c;
     const uint32_t bin = (static_cast<uint32_t>(a) << shift) + row;
     bins[i] = bin;
