@@ -19,9 +19,9 @@ CloudLayout layoutOf(const sensor_msgs::PointCloud2& msg) {
 }
 
 bool viewOf(const sensor_msgs::PointCloud2& msg, CloudLayout* layout, PointCloudView* view,
-            std::string* error) {
+            std::string* error, CloudError* code) {
   *layout = layoutOf(msg);
-  return PointCloudView::create(msg.data.data(), msg.data.size(), *layout, view, error);
+  return PointCloudView::create(msg.data.data(), msg.data.size(), *layout, view, error, code);
 }
 
 namespace {

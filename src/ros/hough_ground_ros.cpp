@@ -67,7 +67,7 @@ void loadHoughMethodSettings(const std::string& method, HoughGroundConfig* c) {
 }
 
 HoughGroundRos::HoughGroundRos(ros::NodeHandle nh, ros::NodeHandle private_nh)
-    : nh_(nh), private_nh_(private_nh), diagnostics_(nh, private_nh) {
+    : nh_(nh), private_nh_(private_nh), health_("HoughGround"), diagnostics_(nh, private_nh) {
   ground_frame_ = private_nh_.param<std::string>("ground_frame", "base_footprint");
   use_tf_ = private_nh_.param("use_tf", true);
   mount_roll_ = private_nh_.param("mount_roll", mount_roll_);
@@ -154,35 +154,10 @@ void HoughGroundRos::reconfigure(HoughGroundConfig& config, uint32_t level) {
   config_changed_ = true;
 }
 
-void HoughGroundRos::reportError(const std::string& kind, const std::string& detail) {
-  uint64_t suppressed = 0;
-  if (health_.report(kind, &suppressed)) {
-    if (suppressed > 0) {
-      ROS_ERROR("HoughGround: %s: %s (%lu more of this kind since the last message)", kind.c_str(),
-                detail.c_str(), static_cast<unsigned long>(suppressed));
-    } else {
-      ROS_ERROR("HoughGround: %s: %s", kind.c_str(), detail.c_str());
-    }
-  }
-}
-
 void HoughGroundRos::tfFailure(const sensor_msgs::LaserScanConstPtr& msg,
-                               tf2_ros::filter_failure_reasons::FilterFailureReason reason) {
+                  tf2_ros::filter_failure_reasons::FilterFailureReason reason) {
   try {
-    std::ostringstream s;
-    s << "scan at " << msg->header.stamp << " dropped: no transform " << ground_frame_ << " <- '"
-      << msg->header.frame_id << "' (";
-    switch (reason) {
-      case tf2_ros::filter_failure_reasons::OutTheBack: s << "scan older than the tf buffer"; break;
-      case tf2_ros::filter_failure_reasons::EmptyFrameID: s << "empty frame_id"; break;
-      default: s << "transform not available in time"; break;
-    }
-    s << ")";
-    uint64_t suppressed = 0;
-    if (health_.dropped("missing tf", &suppressed)) {
-      ROS_WARN("HoughGround: %s (%lu more since the last message)", s.str().c_str(),
-               static_cast<unsigned long>(suppressed));
-    }
+    health_.tfFilterDropped(ground_frame_, msg->header, reason);
   } catch (const std::exception& e) {
     ROS_ERROR_THROTTLE(5.0, "HoughGround: tf failure handler: %s", e.what());
   }
@@ -193,9 +168,9 @@ void HoughGroundRos::scanCallback(const sensor_msgs::LaserScanConstPtr& msg) {
   try {
     process(msg);
   } catch (const std::exception& e) {
-    reportError("internal error", e.what());
+    health_.error("internal error", e.what());
   } catch (...) {
-    reportError("internal error", "unknown exception");
+    health_.error("internal error", "unknown exception");
   }
 }
 
@@ -215,7 +190,7 @@ bool HoughGroundRos::sensorPose(const sensor_msgs::LaserScan& msg, SensorPose* p
   try {
     t = tf_buffer_.lookupTransform(ground_frame_, msg.header.frame_id, msg.header.stamp);
   } catch (const tf2::TransformException& e) {
-    if (health_.dropped("missing tf")) ROS_WARN("HoughGround: %s", e.what());
+    health_.tfLookupFailed(e.what());
     return false;
   }
   // scan frame -> ground frame; shift so the origin is the ground point under the sensor.
@@ -249,7 +224,7 @@ void HoughGroundRos::process(const sensor_msgs::LaserScanConstPtr& msg) {
   scan.intensities = msg->intensities.size() == msg->ranges.size() ? msg->intensities.data() : nullptr;
   std::string error;
   if (!validateLaserScan(scan, &error)) {
-    reportError("unreadable scan", "frame '" + msg->header.frame_id + "': " + error);
+    health_.error("unreadable scan", "frame '" + msg->header.frame_id + "': " + error);
     return;
   }
   SensorPose pose;
@@ -257,7 +232,7 @@ void HoughGroundRos::process(const sensor_msgs::LaserScanConstPtr& msg) {
 
   const ros::WallTime start = ros::WallTime::now();
   if (!hough_.classify(scan, pose, &result_, &error)) {
-    reportError("unreadable scan", error);
+    health_.error("unreadable scan", error);
     return;
   }
   health_.processed((ros::WallTime::now() - start).toSec());
@@ -295,7 +270,7 @@ void HoughGroundRos::process(const sensor_msgs::LaserScanConstPtr& msg) {
     CloudLayout view_layout;
     PointCloudView view;
     if (!viewOf(points, &view_layout, &view, &error)) {
-      reportError("internal error", "projected scan: " + error);
+      health_.error("internal error", "projected scan: " + error);
       return;
     }
     // Fresh messages, published as ConstPtr and never touched again.

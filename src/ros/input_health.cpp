@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <sstream>
 
+#include <ros/console.h>
+
 namespace ladar_perception {
 
 bool InputHealth::report(const std::string& kind, uint64_t* suppressed) {
@@ -20,6 +22,36 @@ bool InputHealth::report(const std::string& kind, uint64_t* suppressed) {
     ++k.suppressed;
   }
   return log;
+}
+
+void InputHealth::error(const std::string& kind, const std::string& detail) {
+  uint64_t suppressed = 0;
+  if (!report(kind, &suppressed)) return;
+  if (suppressed > 0) {
+    ROS_ERROR("%s: %s: %s (%lu more of this kind since the last message)", name_.c_str(),
+              kind.c_str(), detail.c_str(), static_cast<unsigned long>(suppressed));
+  } else {
+    ROS_ERROR("%s: %s: %s", name_.c_str(), kind.c_str(), detail.c_str());
+  }
+}
+
+void InputHealth::tfFilterDropped(const std::string& target_frame, const std_msgs::Header& header,
+                                  tf2_ros::filter_failure_reasons::FilterFailureReason reason) {
+  uint64_t suppressed = 0;
+  if (!dropped("missing tf", &suppressed)) return;
+  const char* why = "transform not available in time";
+  if (reason == tf2_ros::filter_failure_reasons::OutTheBack) why = "message older than the tf buffer";
+  if (reason == tf2_ros::filter_failure_reasons::EmptyFrameID) why = "empty frame_id";
+  std::ostringstream s;
+  s << name_ << ": message at " << header.stamp << " dropped: no transform " << target_frame
+    << " <- '" << header.frame_id << "' (" << why << ")";
+  if (suppressed > 0) s << " (" << suppressed << " more since the last message)";
+  ROS_WARN("%s", s.str().c_str());
+}
+
+void InputHealth::tfLookupFailed(const std::string& what) {
+  uint64_t suppressed = 0;
+  if (dropped("missing tf", &suppressed)) ROS_WARN("%s: %s", name_.c_str(), what.c_str());
 }
 
 void InputHealth::dropped_count() {

@@ -82,7 +82,7 @@ void loadMethodSettings(const std::string& method, VerticalScanGroundConfig* c) 
 }
 
 VerticalScanGroundRos::VerticalScanGroundRos(ros::NodeHandle nh, ros::NodeHandle private_nh)
-    : nh_(nh), private_nh_(private_nh), diagnostics_(nh, private_nh) {
+    : nh_(nh), private_nh_(private_nh), health_("VerticalScanGround"), diagnostics_(nh, private_nh) {
   ground_frame_ = private_nh_.param<std::string>("ground_frame", "base_footprint");
   use_tf_ = private_nh_.param("use_tf", true);
   const int queue_size = private_nh_.param("queue_size", 3);
@@ -176,41 +176,16 @@ std::unique_ptr<GroundModel> VerticalScanGroundRos::makeModel(const VerticalScan
   std::string error;
   std::unique_ptr<GroundModel> model = makeGroundModel(config.method, &error);
   if (!model) {
-    reportError("bad parameter", error + "; using the default method");
+    health_.error("bad parameter", error + "; using the default method");
     model = makeVerticalScanModel(verticalScanDefaultParams());
   }
   return model;
 }
 
-void VerticalScanGroundRos::reportError(const std::string& kind, const std::string& detail) {
-  uint64_t suppressed = 0;
-  if (health_.report(kind, &suppressed)) {
-    if (suppressed > 0) {
-      ROS_ERROR("VerticalScanGround: %s: %s (%lu more of this kind since the last message)",
-                kind.c_str(), detail.c_str(), static_cast<unsigned long>(suppressed));
-    } else {
-      ROS_ERROR("VerticalScanGround: %s: %s", kind.c_str(), detail.c_str());
-    }
-  }
-}
-
 void VerticalScanGroundRos::tfFailure(const sensor_msgs::PointCloud2ConstPtr& msg,
-                                      tf2_ros::filter_failure_reasons::FilterFailureReason reason) {
+                  tf2_ros::filter_failure_reasons::FilterFailureReason reason) {
   try {
-    std::ostringstream s;
-    s << "scan at " << msg->header.stamp << " dropped: no transform " << ground_frame_ << " <- '"
-      << msg->header.frame_id << "' (";
-    switch (reason) {
-      case tf2_ros::filter_failure_reasons::OutTheBack: s << "scan older than the tf buffer"; break;
-      case tf2_ros::filter_failure_reasons::EmptyFrameID: s << "empty frame_id"; break;
-      default: s << "transform not available in time"; break;
-    }
-    s << ")";
-    uint64_t suppressed = 0;
-    if (health_.dropped("missing tf", &suppressed)) {
-      ROS_WARN("VerticalScanGround: %s (%lu more since the last message)", s.str().c_str(),
-               static_cast<unsigned long>(suppressed));
-    }
+    health_.tfFilterDropped(ground_frame_, msg->header, reason);
   } catch (const std::exception& e) {
     ROS_ERROR_THROTTLE(5.0, "VerticalScanGround: tf failure handler: %s", e.what());
   }
@@ -221,9 +196,9 @@ void VerticalScanGroundRos::cloudCallback(const sensor_msgs::PointCloud2ConstPtr
   try {
     process(msg);
   } catch (const std::exception& e) {
-    reportError("internal error", e.what());
+    health_.error("internal error", e.what());
   } catch (...) {
-    reportError("internal error", "unknown exception");
+    health_.error("internal error", "unknown exception");
   }
 }
 
@@ -236,7 +211,7 @@ bool VerticalScanGroundRos::sensorPose(const sensor_msgs::PointCloud2& msg, Sens
   try {
     t = tf_buffer_.lookupTransform(ground_frame_, msg.header.frame_id, msg.header.stamp);
   } catch (const tf2::TransformException& e) {
-    if (health_.dropped("missing tf")) ROS_WARN("VerticalScanGround: %s", e.what());
+    health_.tfLookupFailed(e.what());
     return false;
   }
   // sensor -> ground frame; shift so the origin is the ground point under the sensor.
@@ -262,8 +237,10 @@ void VerticalScanGroundRos::process(const sensor_msgs::PointCloud2ConstPtr& msg)
   CloudLayout layout;
   PointCloudView view;
   std::string error;
-  if (!viewOf(*msg, &layout, &view, &error)) {
-    reportError("unreadable cloud", "frame '" + msg->header.frame_id + "': " + error);
+  CloudError code = CloudError::kNone;
+  if (!viewOf(*msg, &layout, &view, &error, &code)) {
+    health_.error(std::string("unreadable cloud (") + cloudErrorName(code) + ")",
+                  "frame '" + msg->header.frame_id + "': " + error);
     return;
   }
   SensorPose pose;

@@ -307,7 +307,12 @@ TEST_F(VerticalScanGroundTest, BadCloudsAreRejectedAndValidOnesStillProcessed) {
     ++bad;
     ros::WallDuration(0.02).sleep();
   }
-  EXPECT_TRUE(waitFor([&] { return adapter.health().errorCount("unreadable cloud") == static_cast<uint64_t>(bad); }));
+  // Each kind is counted under its own name (so each is reported once per throttle period).
+  EXPECT_TRUE(waitFor([&] { return adapter.health().errorCount() == static_cast<uint64_t>(bad); }));
+  EXPECT_EQ(adapter.health().errorCount("unreadable cloud (truncated data)"), 1u);
+  EXPECT_EQ(adapter.health().errorCount("unreadable cloud (field outside point_step)"), 1u);
+  EXPECT_EQ(adapter.health().errorCount("unreadable cloud (missing x/y/z)"), 1u);
+  EXPECT_EQ(adapter.health().errorCount("unreadable cloud (bad x/y/z datatype)"), 1u);
 
   // Empty, NaN-only and organised clouds with NaN are valid input: labelled, published.
   lp::PackedCloud empty;

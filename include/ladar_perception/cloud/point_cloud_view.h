@@ -46,6 +46,18 @@ struct CloudLayout {
   bool is_bigendian = false;
 };
 
+// Why a cloud cannot be read: adapters count and report each kind separately.
+enum class CloudError : uint8_t {
+  kNone = 0,
+  kBigEndian,       // is_bigendian clouds are not supported
+  kBadStep,         // point_step 0 or row_step smaller than width * point_step
+  kTruncated,       // data shorter than the layout needs
+  kMissingField,    // x, y or z absent
+  kFieldOutside,    // a field does not fit inside point_step
+  kBadFieldType,    // x, y or z of an unknown or non-floating datatype, or count 0
+};
+const char* cloudErrorName(CloudError e);
+
 // Reads one scalar field of a point as double or float, whatever its datatype.
 // Invalid accessors (field absent) are never read.
 struct FieldAccessor {
@@ -79,9 +91,9 @@ class PointCloudView {
   PointCloudView() = default;
 
   // Validates the layout and buffer. On failure returns false and says what is wrong in *error
-  // (one sentence, suitable for a throttled log line).
+  // (one sentence, suitable for a throttled log line) and which kind of problem in *code.
   static bool create(const uint8_t* data, std::size_t data_size, const CloudLayout& layout,
-                     PointCloudView* view, std::string* error);
+                     PointCloudView* view, std::string* error, CloudError* code = nullptr);
 
   std::size_t size() const { return static_cast<std::size_t>(width_) * height_; }
   uint32_t width() const { return width_; }

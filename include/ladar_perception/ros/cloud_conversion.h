@@ -18,7 +18,7 @@ CloudLayout layoutOf(const sensor_msgs::PointCloud2& msg);
 // Validates the message and makes a view over its data (no copy of the points). *layout must
 // outlive the view. False with a one-sentence reason on an unreadable cloud.
 bool viewOf(const sensor_msgs::PointCloud2& msg, CloudLayout* layout, PointCloudView* view,
-            std::string* error);
+            std::string* error, CloudError* code = nullptr);
 
 // Fresh output clouds built from the input and the per-point labels, stamped and framed like
 // the input (interfaces.md):

@@ -56,7 +56,6 @@ class HoughGroundRos {
   void publishLine(const sensor_msgs::LaserScan& msg, const ScanGroundResult& result);
   void reconfigure(HoughGroundConfig& config, uint32_t level);
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status);
-  void reportError(const std::string& kind, const std::string& detail);
 
   ros::NodeHandle nh_;
   ros::NodeHandle private_nh_;

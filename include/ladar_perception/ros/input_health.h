@@ -7,15 +7,30 @@
 #include <map>
 #include <mutex>
 #include <string>
+#include <utility>
 
 #include <diagnostic_updater/DiagnosticStatusWrapper.h>
 #include <ros/time.h>
+#include <std_msgs/Header.h>
+#include <tf2_ros/message_filter.h>
 
 namespace ladar_perception {
 
 class InputHealth {
  public:
-  explicit InputHealth(double throttle_period = 5.0) : throttle_period_(throttle_period) {}
+  // `name` prefixes every log line (the nodelet's type, e.g. "VerticalScanGround").
+  explicit InputHealth(std::string name = "ladar_perception", double throttle_period = 5.0)
+      : name_(std::move(name)), throttle_period_(throttle_period) {}
+
+  // Counts a problem and logs it as an error, throttled per kind, with how many of this kind
+  // were not logged since the last line.
+  void error(const std::string& kind, const std::string& detail);
+  // A message dropped by a tf2_ros::MessageFilter (its transform never came): counted as a
+  // dropped scan of kind "missing tf" and logged as a throttled warning.
+  void tfFilterDropped(const std::string& target_frame, const std_msgs::Header& header,
+                       tf2_ros::filter_failure_reasons::FilterFailureReason reason);
+  // A transform lookup that failed after the filter passed the message.
+  void tfLookupFailed(const std::string& what);
 
   // Counts a problem of the given kind ("unreadable cloud", "missing tf", ...). Returns true
   // when the caller should log it now (first time, or the throttle period has passed since
@@ -48,6 +63,7 @@ class InputHealth {
     ros::WallTime last_seen;
   };
   mutable std::mutex mutex_;
+  std::string name_;
   double throttle_period_;
   std::map<std::string, Kind> kinds_;
   uint64_t processed_ = 0;

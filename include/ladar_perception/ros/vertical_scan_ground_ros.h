@@ -53,7 +53,6 @@ class VerticalScanGroundRos {
   bool sensorPose(const sensor_msgs::PointCloud2& msg, SensorPose* pose);
   void reconfigure(VerticalScanGroundConfig& config, uint32_t level);
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status);
-  void reportError(const std::string& kind, const std::string& detail);
   std::unique_ptr<GroundModel> makeModel(const VerticalScanGroundConfig& config);
 
   ros::NodeHandle nh_;

@@ -32,15 +32,17 @@ namespace {
 // Makes an accessor for a scalar numeric field that lies inside point_step.
 // Returns false with a reason when the field exists but cannot be read.
 bool makeAccessor(const CloudLayout& layout, const std::string& name, bool required,
-                  FieldAccessor* out, std::string* error) {
+                  FieldAccessor* out, std::string* error, CloudError* code = nullptr) {
   *out = FieldAccessor();
   const FieldDesc* f = findField(layout, name);
   if (f == nullptr) {
     if (required && error) *error = "field '" + name + "' is missing";
+    if (required && code) *code = CloudError::kMissingField;
     return !required;
   }
   const std::size_t size = fieldTypeSize(f->datatype);
   std::ostringstream why;
+  CloudError kind = CloudError::kBadFieldType;
   if (size == 0) {
     why << "field '" << name << "' has unknown datatype " << static_cast<int>(f->datatype);
   } else if (f->count < 1) {
@@ -48,11 +50,13 @@ bool makeAccessor(const CloudLayout& layout, const std::string& name, bool requi
   } else if (static_cast<uint64_t>(f->offset) + size > layout.point_step) {
     why << "field '" << name << "' (offset " << f->offset << ", " << size
         << " bytes) does not fit in point_step " << layout.point_step;
+    kind = CloudError::kFieldOutside;
   }
   const std::string reason = why.str();
   if (!reason.empty()) {
     if (required) {
       if (error) *error = reason;
+      if (code) *code = kind;
       return false;
     }
     return true;  // an optional field we cannot read is ignored
@@ -69,19 +73,37 @@ bool isFloatType(const FieldAccessor& a) {
 
 }  // namespace
 
+const char* cloudErrorName(CloudError e) {
+  switch (e) {
+    case CloudError::kNone: return "none";
+    case CloudError::kBigEndian: return "big-endian";
+    case CloudError::kBadStep: return "bad point_step/row_step";
+    case CloudError::kTruncated: return "truncated data";
+    case CloudError::kMissingField: return "missing x/y/z";
+    case CloudError::kFieldOutside: return "field outside point_step";
+    case CloudError::kBadFieldType: return "bad x/y/z datatype";
+  }
+  return "unknown";
+}
+
 bool PointCloudView::create(const uint8_t* data, std::size_t data_size, const CloudLayout& layout,
-                            PointCloudView* view, std::string* error) {
+                            PointCloudView* view, std::string* error, CloudError* code) {
   std::string dummy;
   std::string& err = error ? *error : dummy;
+  CloudError dummy_code = CloudError::kNone;
+  CloudError& why = code ? *code : dummy_code;
+  why = CloudError::kNone;
   *view = PointCloudView();
   if (layout.is_bigendian) {
     err = "big-endian clouds are not supported";
+    why = CloudError::kBigEndian;
     return false;
   }
   const uint64_t npoints = static_cast<uint64_t>(layout.width) * layout.height;
   if (npoints > 0) {
     if (layout.point_step == 0) {
       err = "point_step is 0";
+      why = CloudError::kBadStep;
       return false;
     }
     if (static_cast<uint64_t>(layout.row_step) <
@@ -90,6 +112,7 @@ bool PointCloudView::create(const uint8_t* data, std::size_t data_size, const Cl
       s << "row_step " << layout.row_step << " is smaller than width " << layout.width
         << " * point_step " << layout.point_step;
       err = s.str();
+      why = CloudError::kBadStep;
       return false;
     }
     const uint64_t needed = static_cast<uint64_t>(layout.row_step) * (layout.height - 1) +
@@ -100,17 +123,19 @@ bool PointCloudView::create(const uint8_t* data, std::size_t data_size, const Cl
         << " points with point_step " << layout.point_step << " and row_step " << layout.row_step
         << " need " << needed;
       err = s.str();
+      why = CloudError::kTruncated;
       return false;
     }
   }
   PointCloudView v;
-  if (!makeAccessor(layout, "x", true, &v.x_, &err) ||
-      !makeAccessor(layout, "y", true, &v.y_, &err) ||
-      !makeAccessor(layout, "z", true, &v.z_, &err)) {
+  if (!makeAccessor(layout, "x", true, &v.x_, &err, &why) ||
+      !makeAccessor(layout, "y", true, &v.y_, &err, &why) ||
+      !makeAccessor(layout, "z", true, &v.z_, &err, &why)) {
     return false;
   }
   if (!isFloatType(v.x_) || !isFloatType(v.y_) || !isFloatType(v.z_)) {
     err = "fields x, y, z must be float32 or float64";
+    why = CloudError::kBadFieldType;
     return false;
   }
   makeAccessor(layout, "ring", false, &v.ring_, nullptr);
