@@ -186,19 +186,7 @@ bool HoughGroundRos::sensorPose(const sensor_msgs::LaserScan& msg, SensorPose* p
     pose->sensor_to_ground = t;
     return true;
   }
-  geometry_msgs::TransformStamped t;
-  try {
-    t = tf_buffer_.lookupTransform(ground_frame_, msg.header.frame_id, msg.header.stamp);
-  } catch (const tf2::TransformException& e) {
-    health_.tfLookupFailed(e.what());
-    return false;
-  }
-  // scan frame -> ground frame; shift so the origin is the ground point under the sensor.
-  Eigen::Isometry3d sensor_to_ground = tf2::transformToEigen(t);
-  sensor_to_ground.translation().x() = 0.0;
-  sensor_to_ground.translation().y() = 0.0;
-  pose->sensor_to_ground = sensor_to_ground.cast<float>();
-  return true;
+  return sensorPoseFromTf(tf_buffer_, ground_frame_, msg.header, &health_, pose);
 }
 
 void HoughGroundRos::process(const sensor_msgs::LaserScanConstPtr& msg) {

@@ -4,6 +4,7 @@
 #include <sstream>
 
 #include <ros/console.h>
+#include <tf2_eigen/tf2_eigen.h>
 
 namespace ladar_perception {
 
@@ -110,6 +111,22 @@ void InputHealth::fillDiagnostics(diagnostic_updater::DiagnosticStatusWrapper& s
   } else {
     status.summary(diagnostic_msgs::DiagnosticStatus::OK, "processing");
   }
+}
+
+bool sensorPoseFromTf(const tf2_ros::Buffer& buffer, const std::string& ground_frame,
+                      const std_msgs::Header& header, InputHealth* health, SensorPose* pose) {
+  geometry_msgs::TransformStamped t;
+  try {
+    t = buffer.lookupTransform(ground_frame, header.frame_id, header.stamp);
+  } catch (const tf2::TransformException& e) {
+    health->tfLookupFailed(e.what());
+    return false;
+  }
+  Eigen::Isometry3d sensor_to_ground = tf2::transformToEigen(t);
+  sensor_to_ground.translation().x() = 0.0;
+  sensor_to_ground.translation().y() = 0.0;
+  pose->sensor_to_ground = sensor_to_ground.cast<float>();
+  return true;
 }
 
 }  // namespace ladar_perception

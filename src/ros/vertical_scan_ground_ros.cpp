@@ -207,19 +207,7 @@ bool VerticalScanGroundRos::sensorPose(const sensor_msgs::PointCloud2& msg, Sens
     *pose = SensorPose::fromHeight(sensor_height_);
     return true;
   }
-  geometry_msgs::TransformStamped t;
-  try {
-    t = tf_buffer_.lookupTransform(ground_frame_, msg.header.frame_id, msg.header.stamp);
-  } catch (const tf2::TransformException& e) {
-    health_.tfLookupFailed(e.what());
-    return false;
-  }
-  // sensor -> ground frame; shift so the origin is the ground point under the sensor.
-  Eigen::Isometry3d sensor_to_ground = tf2::transformToEigen(t);
-  sensor_to_ground.translation().x() = 0.0;
-  sensor_to_ground.translation().y() = 0.0;
-  pose->sensor_to_ground = sensor_to_ground.cast<float>();
-  return true;
+  return sensorPoseFromTf(tf_buffer_, ground_frame_, msg.header, &health_, pose);
 }
 
 void VerticalScanGroundRos::process(const sensor_msgs::PointCloud2ConstPtr& msg) {

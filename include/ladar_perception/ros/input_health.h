@@ -14,6 +14,10 @@
 #include <std_msgs/Header.h>
 #include <tf2_ros/message_filter.h>
 
+#include <tf2_ros/buffer.h>
+
+#include "ladar_perception/ground/ground_classification.h"
+
 namespace ladar_perception {
 
 class InputHealth {
@@ -72,5 +76,11 @@ class InputHealth {
   double max_seconds_ = 0.0;
   double sum_seconds_ = 0.0;
 };
+
+// The sensor's pose above the local ground from tf (ground_frame <- header.frame_id at the
+// stamp), shifted so the origin is the ground point under the sensor (SensorPose's convention).
+// A failed lookup is counted and reported through `health`; returns false then.
+bool sensorPoseFromTf(const tf2_ros::Buffer& buffer, const std::string& ground_frame,
+                      const std_msgs::Header& header, InputHealth* health, SensorPose* pose);
 
 }  // namespace ladar_perception
