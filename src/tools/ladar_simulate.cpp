@@ -23,7 +23,7 @@ using namespace ladar_perception;
 
 const char* kUsage = R"(usage: ladar_simulate [options] --out BAG
 World (one of):
-  --world NAME             standard world: thesis urban hillside potholes alley flat (default urban)
+  --world NAME             standard world: thesis urban rural hillside potholes alley flat (default urban)
   --world-image IMAGE      height image (PGM/PNG, black = high) with
     --class-image IMAGE      optional class image (gray = class code, or the class palette)
     --metres-per-pixel M     default 0.1

@@ -51,7 +51,7 @@ TEST(SimWorld, UnknownWorldIsAnError) {
 }
 
 TEST(SimWorld, GenerationIsDeterministicForASeed) {
-  for (const std::string& name : {"thesis", "urban", "potholes"}) {
+  for (const std::string& name : {"thesis", "urban", "rural", "potholes"}) {
     World a, b, c;
     std::string error;
     ASSERT_TRUE(makeStandardWorld(name, 42, &a, &error)) << error;
@@ -149,6 +149,87 @@ TEST(SimWorld, HillsideSlopesStayWithin15Degrees) {
   for (double x = 0.0; x < 100.0; x += 0.1) {
     EXPECT_LT(std::abs(w.height(x + 0.1, 0.05) - w.height(x, 0.05)), w.surfaceModel().curb_min_step);
   }
+}
+
+// The rural road's cross-section (3 % crown, 6 % shoulders, 1:4 side slopes, ditches 0.5 m below
+// the fields) and what stands on and beside it.
+TEST(SimWorld, RuralRoadCrossSection) {
+  const World& w = standard("rural");
+  for (double x = -40.0; x <= 140.0; x += 9.7) {
+    // A stretch without a parked car or a mailbox on either side.
+    bool clear = true;
+    for (double y = -13.0; y <= 13.0; y += 0.1) clear &= isGroundClass(w.surfaceClass(x, y));
+    if (!clear) continue;
+    const double crown = w.height(x, 0.05);
+    EXPECT_NEAR(crown, 0.6, 0.01);
+    for (int side = -1; side <= 1; side += 2) {
+      // Lanes: 3 % down from the crown line to the lane edges, both sides.
+      EXPECT_NEAR(crown - w.height(x, side * 3.45), 0.03 * 3.4, 0.01) << x;
+      EXPECT_EQ(w.surfaceClass(x, side * 3.45), SurfaceClass::kRoad);
+      EXPECT_EQ(w.surfaceClass(x, side * 3.55), SurfaceClass::kTerrain);
+      // Shoulders at 6 %, 1:4 foreslopes, flat ditch bottoms 0.5 m below the fields.
+      EXPECT_NEAR(w.height(x, side * 4.05) - w.height(x, side * 5.05), 0.06, 0.01) << x;
+      EXPECT_NEAR(w.height(x, side * 6.05) - w.height(x, side * 8.05), 0.5, 0.01) << x;
+      EXPECT_NEAR(w.height(x, side * 9.5), -0.5, 0.01) << x;
+      EXPECT_NEAR(w.height(x, side * 11.05) - w.height(x, side * 10.05), 0.25, 0.01) << x;
+      // Everything beside the road lies well below it: a plane through the road misses it.
+      for (double ay = 7.0; ay <= 50.0; ay += 0.5) {
+        if (isGroundClass(w.surfaceClass(x, side * ay))) EXPECT_LT(w.height(x, side * ay), 0.25) << x << " " << ay;
+      }
+    }
+  }
+  // Slopes stay within 15 degrees (the 1:4 side slopes are the steepest, 14 degrees), and no
+  // step between ground cells reads as a curb.
+  double steepest = 0.0;
+  for (double x = -60.0; x < 160.0; x += 0.5) {
+    for (double y = -55.0; y < 55.0; y += 0.5) {
+      if (!isGroundClass(w.surfaceClass(x, y)) || !isGroundClass(w.surfaceClass(x + 1.0, y)) ||
+          !isGroundClass(w.surfaceClass(x, y + 1.0))) {
+        continue;
+      }
+      const double gx = w.height(x + 1.0, y) - w.height(x, y);
+      const double gy = w.height(x, y + 1.0) - w.height(x, y);
+      steepest = std::max(steepest, std::atan(std::hypot(gx, gy)) * 180.0 / M_PI);
+    }
+  }
+  EXPECT_LE(steepest, 15.0);
+  EXPECT_GE(steepest, 13.5);
+  for (int k = 0; k < 400; ++k) {
+    const double y = -19.95 + 0.1 * k;  // cell centres
+    if (isGroundClass(w.surfaceClass(30.05, y)) && isGroundClass(w.surfaceClass(30.05, y + 0.1))) {
+      EXPECT_LT(std::abs(w.height(30.05, y + 0.1) - w.height(30.05, y)), w.surfaceModel().curb_min_step) << y;
+    }
+  }
+  // The obstacles: cars (parked and the stopped one), people (on the shoulder, in the field),
+  // fence posts, mailboxes and trees (poles), hay bales and the barn (walls).
+  std::vector<int> counts(kNumSurfaceClasses, 0);
+  int fence_posts = 0;
+  for (int iy = 0; iy < w.cellsY(); ++iy) {
+    for (int ix = 0; ix < w.cellsX(); ++ix) {
+      const SurfaceClass c = w.cellClass(ix, iy);
+      ++counts[static_cast<int>(c)];
+      const double y = w.originY() + (iy + 0.5) * w.resolution();
+      fence_posts += c == SurfaceClass::kPole && std::abs(std::abs(y) - 12.85) < 0.01;
+    }
+  }
+  for (SurfaceClass c : {SurfaceClass::kRoad, SurfaceClass::kTerrain, SurfaceClass::kCar, SurfaceClass::kWall,
+                         SurfaceClass::kPole, SurfaceClass::kPerson}) {
+    EXPECT_GT(counts[static_cast<int>(c)], 0) << className(c);
+  }
+  EXPECT_EQ(counts[static_cast<int>(SurfaceClass::kCurb)], 0);
+  EXPECT_GE(fence_posts, 2 * 58);  // posts every 4 m along 236 m, both sides
+  // The person on the north shoulder 25 m from the start of the drive.
+  const Eigen::Vector3d start = w.drivePose(0.0).translation();
+  double nearest = 1e9;
+  for (int iy = 0; iy < w.cellsY(); ++iy) {
+    for (int ix = 0; ix < w.cellsX(); ++ix) {
+      if (w.cellClass(ix, iy) != SurfaceClass::kPerson) continue;
+      const double x = w.originX() + (ix + 0.5) * w.resolution();
+      const double y = w.originY() + (iy + 0.5) * w.resolution();
+      nearest = std::min(nearest, std::hypot(x - start.x(), y - start.y()));
+    }
+  }
+  EXPECT_NEAR(nearest, 25.0, 0.4);
 }
 
 TEST(SimWorld, PotholesAreNegativeObstaclesBesideTheDrive) {

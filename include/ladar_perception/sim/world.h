@@ -158,6 +158,11 @@ class World {
 //  thesis   - the calibration test world of 5.2.1: mostly flat, car-sized obstacles
 //  urban    - crowned road, 15 cm curbs, sidewalks, parked cars, a building wall, trees, lamp
 //             posts, a person standing in the road 22 m ahead of the drive's start
+//  rural    - a two-lane rural road on a 0.6 m embankment: 3 % crown, 6 % gravel shoulders, 1:4
+//             side slopes into drainage ditches, undulating fields with fence lines, hay bales,
+//             trees, a barn; cars on the shoulders and in the oncoming lane, a person on the
+//             shoulder 25 m ahead and one in the field (the crowned road where one ground plane
+//             fails, thesis 3.1, 3.2)
 //  hillside - slopes up to 15 degrees with undulations, a parked car at the foot of the hill
 //  potholes - a road with negative obstacles beside the driving line
 //  alley    - two long featureless walls (degenerate for calibration along the alley)

@@ -317,6 +317,119 @@ bool makePotholes(uint32_t seed, World* w, std::string* error) {
   return setDrive(w, {{0, 0}, {120, 0}}, 5.0, error);
 }
 
+// --- rural: a two-lane rural road on a low embankment through farmland, the crowned road of the
+// thesis (3.1, 3.2) in a cross-section built like a real one (AASHTO-style rural two-lane road):
+//  - 3.5 m lanes |y| <= 3.5 with a steep 3 % crown (the upper end for paved rural roads), the
+//    crown 0.6 m above the nominal field level;
+//  - 2 m gravel shoulders 3.5 < |y| <= 5.5 falling at 6 %;
+//  - 1:4 foreslopes down to drainage ditches 0.5 m below the field level (flat bottoms, 1 m
+//    wide, at 9.0 <= |y| <= 10.0), 1:4 backslopes up to the fields at |y| = 12;
+//  - fields beyond, gently undulating (+-0.2 m over tens of metres), with a fence line (posts
+//    every 4 m at |y| = 12.85), trees, round hay bales, a barn and a farm hand standing in the
+//    north field;
+//  - on the road: cars parked on the shoulders, a car stopped in the westbound lane, a person
+//    walking on the north shoulder, mailboxes on the shoulder edges.
+// Everything beside the road lies 0.6-1.1 m below the road surface, so no single plane (or
+// first harmonic per laser) describes the ground the sensor sees; every slope stays within
+// 15 degrees. The drive runs along the eastbound lane, y = -1.75.
+bool makeRural(uint32_t seed, World* w, std::string* error) {
+  if (!w->reset(-70, -60, kCell, 2400, 1200, 0.f, SurfaceClass::kTerrain, error)) return false;
+  Rng rng(seed);
+  Painter paint(w);
+  constexpr double kCrown = 0.03, kShoulder = 0.06, kSide = 0.25;  // cross slopes
+  constexpr double kEmbankment = 0.6, kDitch = -0.5;               // crown, ditch bottom
+  const double p1 = rng.uniform(0, kTwoPi), p2 = rng.uniform(0, kTwoPi), p3 = rng.uniform(0, kTwoPi);
+  paint.ground([&](double x, double y, float* h, SurfaceClass* c) {
+    const double ay = std::abs(y);
+    const double edge = kEmbankment - kCrown * 3.5 - kShoulder * 2.0;  // shoulder edge
+    const double ditch0 = 5.5 + (edge - kDitch) / kSide;               // foot of the foreslope
+    const double ditch1 = ditch0 + 1.0;
+    const double field = ditch1 + (0.0 - kDitch) / kSide;              // top of the backslope
+    double z;
+    if (ay <= 3.5) {
+      z = kEmbankment - kCrown * ay;
+      *c = SurfaceClass::kRoad;
+    } else {
+      *c = SurfaceClass::kTerrain;
+      if (ay <= 5.5) z = kEmbankment - kCrown * 3.5 - kShoulder * (ay - 3.5);
+      else if (ay <= ditch0) z = edge - kSide * (ay - 5.5);
+      else if (ay <= ditch1) z = kDitch;
+      else if (ay <= field) z = kDitch + kSide * (ay - ditch1);
+      else {
+        const double und = 0.15 * std::sin(kTwoPi * x / 37.0 + p1) * std::sin(kTwoPi * y / 29.0 + p2) +
+                           0.05 * std::sin(kTwoPi * (x - y) / 13.0 + p3);
+        z = und * smoothstep((ay - field) / 6.0);
+      }
+    }
+    *h = static_cast<float>(z);
+  });
+  Placement taken;
+  // Road users first: the person walking on the north shoulder 25 m ahead of the drive's start
+  // (0, -1.75), a car stopped in the westbound lane 55 m ahead, cars parked on the shoulders.
+  const double person_x = std::sqrt(25.0 * 25.0 - 6.25 * 6.25), person_y = 4.5;
+  {
+    const float ground = w->height(person_x, person_y);
+    paint.ellipse(person_x, person_y, 0.16, 0.26,
+                  [&](double rho) { return ground + (rho < 0.6 ? 1.75 : 1.45); }, SurfaceClass::kPerson);
+    taken.take(person_x, person_y, 5.0);
+  }
+  paint.car(55.0, 1.75, M_PI, 4.6, 1.8, 1.5);
+  taken.take(55.0, 1.75, 4.0);
+  for (int k = 0, attempt = 0; k < 6 && attempt < 500; ++attempt) {
+    const double x = rng.uniform(-60.0, 160.0), side = rng.uniform() < 0.5 ? -1.0 : 1.0;
+    if (!taken.free(x, side * 4.6, 3.5)) continue;
+    paint.car(x, side * 4.6, side > 0 ? M_PI : 0.0, rng.uniform(4.2, 5.2), rng.uniform(1.7, 1.9),
+              rng.uniform(1.4, 1.9));
+    taken.take(x, side * 4.6, 3.5);
+    ++k;
+  }
+  // Mailboxes on the shoulder edges (a post with the box on top, 1.1 m).
+  for (int k = 0, attempt = 0; k < 8 && attempt < 500; ++attempt) {
+    const double x = rng.uniform(-65.0, 165.0), y = (rng.uniform() < 0.5 ? -1.0 : 1.0) * 5.3;
+    if (!taken.free(x, y, 1.5)) continue;
+    paint.pole(x, y, 0.12, 1.1);
+    taken.take(x, y, 1.5);
+    ++k;
+  }
+  // Fence lines along both fields: 1.2 m posts (12 cm) every 4 m, on cell centres so that each
+  // post covers at least one cell.
+  for (int side = -1; side <= 1; side += 2) {
+    const double x0 = -67.95 + 0.1 * rng.uniformInt(0, 39);
+    for (int k = 0; x0 + 4.0 * k < 168.0; ++k) paint.pole(x0 + 4.0 * k, side * 12.85, 0.06, 1.2);
+  }
+  // A barn and a farm hand in the north field, hay bales and trees in both.
+  const double barn_x = rng.uniform(20.0, 80.0);
+  paint.box(barn_x, 38.0, 0.0, 20.0, 12.0, [](double, double) { return 6.0; }, w->height(barn_x, 38.0),
+            SurfaceClass::kWall);
+  taken.take(barn_x, 38.0, 13.0);
+  for (int attempt = 0; attempt < 500; ++attempt) {
+    const double x = rng.uniform(25.0, 45.0), y = rng.uniform(16.0, 22.0);
+    if (!taken.free(x, y, 1.0)) continue;
+    const float ground = w->height(x, y);
+    paint.ellipse(x, y, 0.16, 0.26, [&](double rho) { return ground + (rho < 0.6 ? 1.75 : 1.45); },
+                  SurfaceClass::kPerson);
+    taken.take(x, y, 1.0);
+    break;
+  }
+  for (int k = 0, attempt = 0; k < 24 && attempt < 2000; ++attempt) {
+    const double x = rng.uniform(-65.0, 165.0), y = (rng.uniform() < 0.5 ? -1.0 : 1.0) * rng.uniform(15.0, 55.0);
+    if (!taken.free(x, y, 2.5)) continue;
+    const float ground = w->height(x, y);
+    const double r = rng.uniform(0.7, 0.8), top = rng.uniform(1.2, 1.5);
+    paint.ellipse(x, y, r, r, [&](double) { return ground + top; }, SurfaceClass::kWall);
+    taken.take(x, y, 2.5);
+    ++k;
+  }
+  for (int k = 0, attempt = 0; k < 30 && attempt < 2000; ++attempt) {
+    const double x = rng.uniform(-65.0, 165.0), y = (rng.uniform() < 0.5 ? -1.0 : 1.0) * rng.uniform(14.0, 58.0);
+    if (!taken.free(x, y, 3.0)) continue;
+    paint.pole(x, y, rng.uniform(0.12, 0.3), rng.uniform(3.0, 6.0));
+    taken.take(x, y, 3.0);
+    ++k;
+  }
+  return setDrive(w, {{0, -1.75}, {100, -1.75}}, 5.0, error);
+}
+
 // --- alley: two 5 m walls 6 m apart, 220 m long, longer than the Velodyne sees, on flat
 // ground: along the alley nothing constrains x.
 bool makeAlley(uint32_t, World* w, std::string* error) {
@@ -337,13 +450,14 @@ bool makeFlat(uint32_t, World* w, std::string* error) {
 }  // namespace
 
 std::vector<std::string> standardWorldNames() {
-  return {"thesis", "urban", "hillside", "potholes", "alley", "flat"};
+  return {"thesis", "urban", "rural", "hillside", "potholes", "alley", "flat"};
 }
 
 bool makeStandardWorld(const std::string& name, uint32_t seed, World* out, std::string* error) {
   bool ok = false;
   if (name == "thesis") ok = makeThesis(seed, out, error);
   else if (name == "urban") ok = makeUrban(seed, out, error);
+  else if (name == "rural") ok = makeRural(seed, out, error);
   else if (name == "hillside") ok = makeHillside(seed, out, error);
   else if (name == "potholes") ok = makePotholes(seed, out, error);
   else if (name == "alley") ok = makeAlley(seed, out, error);
