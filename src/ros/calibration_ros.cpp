@@ -17,10 +17,10 @@ namespace ladar_perception {
 namespace cal = calibration;
 
 bool calibrationPoints(const sensor_msgs::PointCloud2& msg, double min_range, double max_range,
-                       cal::PointVector* points, std::string* error) {
+                       cal::PointVector* points, std::string* error, CloudError* code) {
   CloudLayout layout;
   PointCloudView view;
-  if (!viewOf(msg, &layout, &view, error)) return false;
+  if (!viewOf(msg, &layout, &view, error, code)) return false;
   cal::pointsFromView(view, min_range, max_range, points);
   return true;
 }
@@ -68,7 +68,11 @@ std::string poseText(const cal::Pose6& p) {
 }  // namespace
 
 CalibrationRos::CalibrationRos(ros::NodeHandle nh, ros::NodeHandle private_nh)
-    : nh_(nh), private_nh_(private_nh), service_nh_(private_nh) {
+    : nh_(nh),
+      private_nh_(private_nh),
+      service_nh_(private_nh),
+      health_("Calibration"),
+      diagnostics_(nh, private_nh) {
   odom_frame_ = private_nh_.param<std::string>("odom_frame", "odom");
   base_frame_ = private_nh_.param<std::string>("base_frame", "base_link");
   output_file_ = private_nh_.param<std::string>("output_file", "");
@@ -102,6 +106,16 @@ CalibrationRos::CalibrationRos(ros::NodeHandle nh, ros::NodeHandle private_nh)
   service_spinner_.reset(new ros::AsyncSpinner(2, &service_queue_));
   service_spinner_->start();
 
+  diagnostics_.setHardwareID("none");
+  diagnostics_.add("calibration", this, &CalibrationRos::diagnose);
+  diagnostics_timer_ = private_nh_.createTimer(ros::Duration(1.0), [this](const ros::TimerEvent&) {
+    try {
+      diagnostics_.update();
+    } catch (const std::exception& e) {
+      ROS_ERROR_THROTTLE(10.0, "Calibration: diagnostics update failed: %s", e.what());
+    }
+  });
+
   drain_timer_ = nh_.createTimer(ros::Duration(0.05), &CalibrationRos::drainPending, this);
   const int queue = private_nh_.param("queue_size", 20);
   for (int s = 0; s < 2; ++s) {
@@ -128,6 +142,7 @@ CalibrationRos::~CalibrationRos() {
   shutting_down_ = true;  // a running calibration stops at its next progress report
   for (Sensor& s : sensors_) s.subscriber.shutdown();
   drain_timer_.stop();
+  diagnostics_timer_.stop();
   if (service_spinner_) service_spinner_->stop();
   calibrate_srv_.shutdown();
   reset_srv_.shutdown();
@@ -143,14 +158,16 @@ void CalibrationRos::cloudCallback(const sensor_msgs::PointCloud2ConstPtr& msg, 
   try {
     cal::PointVector points;
     std::string error;
-    if (!calibrationPoints(*msg, min_range_, max_range_, &points, &error)) {
-      ROS_ERROR_STREAM_THROTTLE(5.0, "Calibration: unreadable " << (target ? "target" : "reference")
-                                << " cloud: " << error);
+    CloudError code = CloudError::kNone;
+    if (!calibrationPoints(*msg, min_range_, max_range_, &points, &error, &code)) {
+      health_.error(std::string("unreadable cloud (") + cloudErrorName(code) + ")",
+                    std::string(target ? "target" : "reference") + " cloud in frame '" +
+                        msg->header.frame_id + "': " + error);
       return;
     }
     enqueue(target, msg->header.frame_id, msg->header.stamp, std::move(points));
   } catch (const std::exception& e) {
-    ROS_ERROR_STREAM_THROTTLE(5.0, "Calibration: cloud callback failed: " << e.what());
+    health_.error("callback failure", std::string("cloud callback: ") + e.what());
   }
 }
 
@@ -159,13 +176,13 @@ void CalibrationRos::scanCallback(const sensor_msgs::LaserScanConstPtr& msg, boo
     cal::PointVector points;
     std::string error;
     if (!calibrationPoints(*msg, &points, &error)) {
-      ROS_ERROR_STREAM_THROTTLE(5.0, "Calibration: unreadable " << (target ? "target" : "reference")
-                                << " scan: " << error);
+      health_.error("unreadable scan", std::string(target ? "target" : "reference") +
+                                           " scan in frame '" + msg->header.frame_id + "': " + error);
       return;
     }
     enqueue(target, msg->header.frame_id, msg->header.stamp, std::move(points));
   } catch (const std::exception& e) {
-    ROS_ERROR_STREAM_THROTTLE(5.0, "Calibration: scan callback failed: " << e.what());
+    health_.error("callback failure", std::string("scan callback: ") + e.what());
   }
 }
 
@@ -176,15 +193,20 @@ void CalibrationRos::enqueue(bool target, const std::string& frame, const ros::T
   Sensor& s = sensors_[target ? 1 : 0];
   if (s.frame.empty()) s.frame = frame;
   if (frame != s.frame) {
-    ROS_WARN_STREAM_THROTTLE(5.0, "Calibration: " << (target ? "target" : "reference")
-                             << " message in frame '" << frame << "', expected '" << s.frame
-                             << "'; ignored");
+    health_.error("unexpected frame", std::string(target ? "target" : "reference") +
+                                          " message in frame '" + frame + "', expected '" +
+                                          s.frame + "'; ignored");
     return;
   }
   s.pending.push_back({stamp, std::move(points)});
   while (s.pending.size() > static_cast<std::size_t>(4 * buffer_size_)) {
     s.pending.pop_front();
-    ++s.dropped;
+    uint64_t suppressed = 0;
+    if (health_.dropped("pending queue full", &suppressed)) {
+      ROS_WARN_STREAM("Calibration: more than " << 4 * buffer_size_ << " "
+                      << (target ? "target" : "reference") << " scans wait for their vehicle "
+                      "pose; oldest dropped (" << suppressed << " more since the last message)");
+    }
   }
 }
 
@@ -207,23 +229,40 @@ void CalibrationRos::drainPending(const ros::TimerEvent&) {
           s.pending.pop_front();
           s.buffer.push_back(std::move(b));
           while (s.buffer.size() > static_cast<std::size_t>(buffer_size_)) s.buffer.pop_front();
+          health_.processed(0.0);
           continue;
         }
-        if ((now - p.stamp).toSec() > tf_wait_) {
-          ROS_WARN_STREAM_THROTTLE(5.0, "Calibration: no vehicle pose " << odom_frame_ << " -> "
-                                   << base_frame_ << " at a " << (k ? "target" : "reference")
-                                   << " scan's stamp after " << tf_wait_ << " s; scan dropped ("
-                                   << why << ")");
+        // Waited too long, or stamped far ahead of the clock (a bag that looped back in time:
+        // tf has cleared its buffer and that pose will not come).
+        if ((now - p.stamp).toSec() > tf_wait_ || (p.stamp - now).toSec() > tf_wait_) {
+          health_.tfLookupFailed("Calibration: no vehicle pose " + odom_frame_ + " -> " +
+                                 base_frame_ + " at a " + (k ? "target" : "reference") +
+                                 " scan's stamp within " + std::to_string(tf_wait_) +
+                                 " s; scan dropped (" + why + ")");
           s.pending.pop_front();
-          ++s.dropped;
           continue;
         }
         break;  // stamps are ordered: later scans wait too
       }
     }
   } catch (const std::exception& e) {
-    ROS_ERROR_STREAM_THROTTLE(5.0, "Calibration: buffering failed: " << e.what());
+    health_.error("callback failure", std::string("buffering: ") + e.what());
   }
+}
+
+void CalibrationRos::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) {
+  health_.fillDiagnostics(status);
+  std::lock_guard<std::mutex> lock(mutex_);
+  for (int k = 0; k < 2; ++k) {
+    const std::string role = k ? "target" : "reference";
+    status.add(role + " frame", sensors_[k].frame.empty() ? std::string("(none yet)") : sensors_[k].frame);
+    status.add(role + " scans buffered", sensors_[k].buffer.size());
+    status.add(role + " scans waiting for a pose", sensors_[k].pending.size());
+  }
+  status.add("calibration running", busy_.load());
+  status.add("last result", have_result_ ? (last_result_.success ? "success" : "no success")
+                                          : "none");
+  if (have_result_) status.add("last final cost", last_result_.final_cost);
 }
 
 bool CalibrationRos::publishProgress(const cal::SearchProgress& p) {

@@ -73,7 +73,7 @@ HoughGroundRos::HoughGroundRos(ros::NodeHandle nh, ros::NodeHandle private_nh)
   mount_roll_ = private_nh_.param("mount_roll", mount_roll_);
   mount_pitch_ = private_nh_.param("mount_pitch", mount_pitch_);
   const int queue_size = private_nh_.param("queue_size", 5);
-  const double tf_tolerance = private_nh_.param("tf_tolerance", 0.05);
+  const double tf_tolerance = private_nh_.param("tf_tolerance", 0.0);
   expected_rate_min_ = private_nh_.param("expected_rate_min", 50.0);
   expected_rate_max_ = private_nh_.param("expected_rate_max", 100.0);
 

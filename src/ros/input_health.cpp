@@ -82,8 +82,18 @@ uint64_t InputHealth::errorCount() const {
 
 uint64_t InputHealth::errorCount(const std::string& kind) const {
   std::lock_guard<std::mutex> lock(mutex_);
-  auto it = kinds_.find(kind);
-  return it == kinds_.end() ? 0 : it->second.count;
+  const std::string sub_kind_prefix = kind + " (";
+  uint64_t n = 0;
+  for (auto it = kinds_.lower_bound(kind); it != kinds_.end(); ++it) {
+    if (it->first == kind) {
+      n += it->second.count;
+    } else if (it->first.compare(0, sub_kind_prefix.size(), sub_kind_prefix) == 0) {
+      n += it->second.count;
+    } else if (it->first.compare(0, kind.size(), kind) != 0) {
+      break;  // sorted: past every key that starts with `kind`
+    }
+  }
+  return n;
 }
 
 void InputHealth::fillDiagnostics(diagnostic_updater::DiagnosticStatusWrapper& status) const {

@@ -86,7 +86,7 @@ VerticalScanGroundRos::VerticalScanGroundRos(ros::NodeHandle nh, ros::NodeHandle
   ground_frame_ = private_nh_.param<std::string>("ground_frame", "base_footprint");
   use_tf_ = private_nh_.param("use_tf", true);
   const int queue_size = private_nh_.param("queue_size", 3);
-  const double tf_tolerance = private_nh_.param("tf_tolerance", 0.1);
+  const double tf_tolerance = private_nh_.param("tf_tolerance", 0.0);
   expected_rate_min_ = private_nh_.param("expected_rate_min", 5.0);
   expected_rate_max_ = private_nh_.param("expected_rate_max", 20.0);
 

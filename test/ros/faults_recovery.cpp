@@ -20,7 +20,7 @@
 #include <ros/ros.h>
 #include <sensor_msgs/PointCloud2.h>
 #include <tf2_ros/static_transform_broadcaster.h>
-#include <tf2_ros/transform_broadcaster.h>
+#include <tf2_msgs/TFMessage.h>
 
 #include "ladar_perception/Calibrate.h"
 #include "ladar_perception/cloud/point_cloud_view.h"
@@ -104,8 +104,18 @@ TEST_F(Faults, TfLateNeverAndJumpingBack) {
   Counter classified;
   ros::Subscriber sub = nh.subscribe("classified", 100, &Counter::callback, &classified);
   ros::Publisher pub = nh.advertise<sensor_msgs::PointCloud2>("points", 100);
-  tf2_ros::TransformBroadcaster tf;
-  ASSERT_TRUE(waitFor([&] { return pub.getNumSubscribers() > 0; }));
+  // tf through a plain publisher so the test can wait until the adapter's listener is connected
+  // (a transform published before that would be lost, which is not the fault under test).
+  ros::Publisher tf_pub = ros::NodeHandle().advertise<tf2_msgs::TFMessage>("/tf", 100);
+  struct {
+    ros::Publisher* pub;
+    void sendTransform(const geometry_msgs::TransformStamped& t) {
+      tf2_msgs::TFMessage m;
+      m.transforms.push_back(t);
+      pub->publish(m);
+    }
+  } tf{&tf_pub};
+  ASSERT_TRUE(waitFor([&] { return pub.getNumSubscribers() > 0 && tf_pub.getNumSubscribers() > 0; }));
   const lp::PackedCloud cloud = flatCloud(1600);
 
   // Late: the scan arrives before any transform of its (moving) frame; it waits in the tf
@@ -120,11 +130,14 @@ TEST_F(Faults, TfLateNeverAndJumpingBack) {
 
   // Never: scans of a frame nobody publishes are dropped (pushed out of the filter's queue of
   // 3) and counted, and the nodelet goes on with valid scans.
+  // Paced on the drop count so the subscriber's own queue (3) never overflows unseen.
   for (int i = 0; i < 10; ++i) {
     pub.publish(cloudMsg(cloud, "never_published", t + ros::Duration(0.1 * i)));
+    const uint64_t expected = i >= 3 ? static_cast<uint64_t>(i - 2) : 0u;
+    ASSERT_TRUE(waitFor([&] { return adapter.health().errorCount("missing tf") == expected; }, 10.0))
+        << "scan " << i << ": " << adapter.health().errorCount("missing tf") << " dropped";
   }
-  EXPECT_TRUE(waitFor([&] { return adapter.health().errorCount("missing tf") >= 7u; }))
-      << adapter.health().errorCount("missing tf");
+  EXPECT_EQ(adapter.health().errorCount("missing tf"), 7u);
   pub.publish(cloudMsg(cloud, "velodyne", ros::Time::now()));
   ASSERT_TRUE(waitFor([&] { return classified.count == 2; }));
 
@@ -133,14 +146,24 @@ TEST_F(Faults, TfLateNeverAndJumpingBack) {
   // (processed, or dropped and counted) and fresh scans are processed afterwards.
   const ros::Time back = t - ros::Duration(60.0);
   const uint64_t missing_before = adapter.health().errorCount("missing tf");
+  // Each publication is paced on its answer (or 2 s) so the subscriber's queue never overflows.
+  const auto answered = [&] {
+    return static_cast<uint64_t>(classified.count) + adapter.health().errorCount("missing tf");
+  };
   for (int i = 0; i < 5; ++i) {
     const ros::Time s = back + ros::Duration(0.1 * i);
     tf.sendTransform(transform("base_footprint", "velodyne_moving", 1.8, s - ros::Duration(0.05)));
     tf.sendTransform(transform("base_footprint", "velodyne_moving", 1.8, s + ros::Duration(0.05)));
+    const uint64_t before_scan = answered();
     pub.publish(cloudMsg(cloud, "velodyne_moving", s));
+    waitFor([&] { return answered() > before_scan; }, 2.0);
   }
   // Push any scan still waiting out of the filter's queue with scans of an absent frame.
-  for (int i = 0; i < 4; ++i) pub.publish(cloudMsg(cloud, "never_published", back));
+  for (int i = 0; i < 4; ++i) {
+    const uint64_t before_scan = answered();
+    pub.publish(cloudMsg(cloud, "never_published", back));
+    waitFor([&] { return answered() > before_scan; }, 2.0);
+  }
   EXPECT_TRUE(waitFor([&] {
     return static_cast<uint64_t>(classified.count - 2) +
                (adapter.health().errorCount("missing tf") - missing_before) >= 5u;
@@ -232,7 +255,9 @@ TEST_F(Faults, CalibrationServiceAnswersEveryBadRequest) {
   EXPECT_FALSE(res.message.empty());
   // A flat ground alone fixes z, roll and pitch only: whatever the verdict, the answer must
   // say so rather than claim a full calibration.
-  if (res.success) EXPECT_FALSE(res.unobservable.empty()) << res.message;
+  if (res.success) {
+    EXPECT_FALSE(res.unobservable.empty()) << res.message;
+  }
 
   // An initial guess that is not a rotation.
   req.initial_guess.translation.x = 1.0;

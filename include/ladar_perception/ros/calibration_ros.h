@@ -9,7 +9,8 @@
 // The vehicle pose is looked up with canTransform/lookupTransform (no waiting) and scans whose
 // pose is not yet in the tf buffer wait in a small pending queue drained by a timer; a
 // tf2_ros::MessageFilter cannot be used because the target sensor's frame is, by definition, not
-// (correctly) connected to the tree.
+// (correctly) connected to the tree. Bad input is counted and logged per kind through
+// InputHealth and shown on /diagnostics with the buffer fill.
 #pragma once
 
 #include <atomic>
@@ -19,6 +20,7 @@
 #include <string>
 #include <thread>
 
+#include <diagnostic_updater/diagnostic_updater.h>
 #include <ros/callback_queue.h>
 #include <ros/ros.h>
 #include <sensor_msgs/LaserScan.h>
@@ -29,12 +31,14 @@
 
 #include "ladar_perception/Calibrate.h"
 #include "ladar_perception/calibration/calibrator.h"
+#include "ladar_perception/ros/input_health.h"
 
 namespace ladar_perception {
 
 // Message -> points in the sensor frame (no algorithm: the core's readers). False with a reason.
 bool calibrationPoints(const sensor_msgs::PointCloud2& msg, double min_range, double max_range,
-                       calibration::PointVector* points, std::string* error);
+                       calibration::PointVector* points, std::string* error,
+                       CloudError* code = nullptr);
 bool calibrationPoints(const sensor_msgs::LaserScan& msg, calibration::PointVector* points,
                        std::string* error);
 
@@ -46,6 +50,7 @@ class CalibrationRos {
   ~CalibrationRos();
 
   std::size_t bufferedScans(bool target) const;
+  const InputHealth& health() const { return health_; }
 
  private:
   struct BufferedScan {
@@ -63,7 +68,6 @@ class CalibrationRos {
     std::deque<BufferedScan> buffer;
     std::deque<PendingScan> pending;
     ros::Subscriber subscriber;
-    std::size_t dropped = 0;
   };
 
   void cloudCallback(const sensor_msgs::PointCloud2ConstPtr& msg, bool target);
@@ -78,6 +82,7 @@ class CalibrationRos {
   void runCalibration(const ladar_perception::Calibrate::Request& req,
                       ladar_perception::Calibrate::Response& res);
   bool publishProgress(const calibration::SearchProgress& p);
+  void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status);
   std::string outputPath() const;
 
   ros::NodeHandle nh_, private_nh_, service_nh_;
@@ -86,6 +91,10 @@ class CalibrationRos {
   ros::Publisher progress_pub_, progress_estimate_pub_;
   ros::ServiceServer calibrate_srv_, reset_srv_, save_srv_;
   ros::Timer drain_timer_;
+
+  InputHealth health_;
+  diagnostic_updater::Updater diagnostics_;
+  ros::Timer diagnostics_timer_;
 
   tf2_ros::Buffer tf_buffer_;
   std::unique_ptr<tf2_ros::TransformListener> tf_listener_;

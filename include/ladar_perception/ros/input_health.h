@@ -56,6 +56,8 @@ class InputHealth {
 
   uint64_t processedCount() const;
   uint64_t errorCount() const;
+  // Problems of `kind` and of its sub-kinds: "unreadable cloud" also counts
+  // "unreadable cloud (data too short)" and every other "unreadable cloud (...)".
   uint64_t errorCount(const std::string& kind) const;
 
  private:
