@@ -1,17 +1,23 @@
 // ground_eval: accuracy of the ground models on the simulator's worlds with ground truth,
 // printed as a Markdown table (with the command line that produced it).
 //
-//   ground_eval [--worlds flat,urban,hillside,potholes] [--method NAME[,NAME]]
+//   ground_eval [--worlds flat,urban,rural,hillside,potholes] [--method NAME[,NAME]]
 //               [--noise datasheet|table4.1|none] [--scans N] [--seed S] [--classes]
 //               [--sick-scans N] [--markdown OUT]
 // By default every ground model (HDL-64E revolutions) on every standard world, then the vertical
 // SICK's ground fits (the Hough fit of 3.3.4 against the 1-DOF vertical scan line), with the
-// median core time per scan; --markdown also writes the table to OUT (for the README).
+// median core time per scan; then the thesis's findings checked against the table (those whose
+// rows were evaluated): the plane (3.1) and analog signal (3.2) baselines fail on the crowned
+// road ("rural") and the hillside but not on flat ground, where the vertical scan method does
+// not; on the undulating hillside the Hough fit beats the 1-DOF line on the vertical SICK.
+// --markdown also writes the table and the findings to OUT (for the README). Exit status 3 when a
+// finding checked is not reproduced (1: an evaluation failed, 2: bad arguments).
 #include <cstdarg>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <iostream>
+#include <map>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -109,10 +115,19 @@ int main(int argc, char** argv) {
     else if (a == "--sick-scans") sick_scans = std::atoi(next().c_str());
     else if (a == "--markdown") markdown_path = next();
     else {
-      std::cerr << "usage: ground_eval [--worlds a,b] [--method m1,m2] "
-                   "[--noise datasheet|table4.1|none] [--scans N] [--seed S] [--classes] [--set key=value]... "
-                   "[--sick-scans N] [--markdown OUT]\n";
-      return a == "-h" || a == "--help" ? 0 : 2;
+      const bool help = a == "-h" || a == "--help";
+      std::ostream& out = help ? std::cout : std::cerr;
+      if (!help) out << "ground_eval: unknown argument " << a << "\n";
+      out << "usage: ground_eval [--worlds a,b] [--method m1,m2] "
+             "[--noise datasheet|table4.1|none] [--scans N] [--seed S] [--classes] [--set key=value]... "
+             "[--png-errors PREFIX] [--sick-scans N] [--markdown OUT]\n  worlds (default all):";
+      for (const std::string& w : sim::standardWorldNames()) out << " " << w;
+      out << "\n  methods (default all):";
+      for (const std::string& m : groundModelNames()) out << " " << m;
+      out << "\n  --sick-scans N: vertical SICK scans per world for the Hough / 1-DOF rows (default 200, 0: none)\n"
+             "  After the table: the thesis's findings (3.1-3.3.4) checked on the rows evaluated.\n"
+             "  Exit status: 0 ok, 1 an evaluation failed, 2 bad arguments, 3 a finding not reproduced.\n";
+      return help ? 0 : 2;
     }
   }
   sim::NoiseProfile noise;
@@ -141,7 +156,9 @@ int main(int argc, char** argv) {
   emit("\n|---|---|---|---|---|---|---|---|---|");
   if (per_class) for (int c = 0; c < sim::kNumSurfaceClasses; ++c) emit("---|");
   emit("\n");
+  std::map<std::pair<std::string, std::string>, GroundAccuracy> results;  // (world, row name)
   auto row = [&](const std::string& w, const std::string& name, const GroundAccuracy& acc, double ms) {
+    results[{w, name}] = acc;
     char obstacle[32] = "-";  // no obstacle in view (the vertical SICK on an open drive)
     if (acc.truth_obstacle > 0) std::snprintf(obstacle, sizeof(obstacle), "%.2f%%", 100.0 * acc.obstacleRecall());
     emit("| %s | %s | %s | %zu | %zu | %.2f%% | %.2f%% | %s | %.3f |", w.c_str(), name.c_str(),
@@ -204,6 +221,80 @@ int main(int argc, char** argv) {
         row(w, sickGroundFitName(fit), acc, medianMs(ms));
       }
     }
+  }
+  // The thesis's findings, checked on the rows above (those whose rows were evaluated).
+  // A baseline "fails" on a world where one of its accuracies (ground precision, ground recall,
+  // obstacle recall) is at least kFailPoints below the vertical scan method's on the same scans,
+  // and "holds up" where none is more than kHoldPoints below.
+  constexpr double kFailPoints = 5.0, kHoldPoints = 1.0;
+  auto find = [&](const std::string& w, const std::string& name) -> const GroundAccuracy* {
+    auto it = results.find({w, name});
+    return it == results.end() ? nullptr : &it->second;
+  };
+  // The largest deficit of `a` against `ref` in points, and the measure it is in.
+  auto deficit = [](const GroundAccuracy& a, const GroundAccuracy& ref, const char** measure) {
+    double worst = 100.0 * (ref.groundPrecision() - a.groundPrecision());
+    *measure = "ground precision";
+    const double recall = 100.0 * (ref.groundRecall() - a.groundRecall());
+    if (recall > worst) { worst = recall; *measure = "ground recall"; }
+    if (ref.truth_obstacle > 0) {
+      const double obstacle = 100.0 * (ref.obstacleRecall() - a.obstacleRecall());
+      if (obstacle > worst) { worst = obstacle; *measure = "obstacle recall"; }
+    }
+    return worst;
+  };
+  auto value = [](const GroundAccuracy& a, const std::string& measure) {
+    if (measure == "ground precision") return 100.0 * a.groundPrecision();
+    if (measure == "ground recall") return 100.0 * a.groundRecall();
+    return 100.0 * a.obstacleRecall();
+  };
+  std::vector<std::string> findings;  // table rows
+  int reproduced = 0, checked = 0;
+  auto finding = [&](const char* fmt, ...) {
+    char buf[512];
+    va_list args;
+    va_start(args, fmt);
+    std::vsnprintf(buf, sizeof(buf), fmt, args);
+    va_end(args);
+    findings.emplace_back(buf);
+  };
+  for (const char* baseline : {"plane", "analog_signal"}) {
+    for (const char* w : {"rural", "hillside", "flat"}) {
+      const GroundAccuracy* a = find(w, baseline);
+      const GroundAccuracy* ref = find(w, "vertical_scan");
+      if (!a || !ref) continue;
+      const bool expect_fail = std::string(w) != "flat";
+      const char* measure = "";
+      const double d = deficit(*a, *ref, &measure);
+      const bool ok = expect_fail ? d >= kFailPoints : d <= kHoldPoints;
+      ++checked;
+      reproduced += ok;
+      finding("| %s %s on %s%s | %s %.2f%% vs vertical_scan %.2f%% (%+.1f points) | %s |\n", baseline,
+              expect_fail ? "fails" : "holds up", w, std::string(w) == "rural" ? " (crowned road)" : "",
+              measure, value(*a, measure), value(*ref, measure), -d + 0.0, ok ? "yes" : "NO");
+    }
+  }
+  {
+    const GroundAccuracy* hough = find("hillside", sickGroundFitName(SickGroundFit::kHough));
+    const GroundAccuracy* one_dof = find("hillside", sickGroundFitName(SickGroundFit::kOneDof));
+    if (hough && one_dof) {
+      const bool ok = hough->groundRecall() > one_dof->groundRecall() &&
+                      hough->groundPrecision() >= one_dof->groundPrecision() - 0.001;
+      ++checked;
+      reproduced += ok;
+      finding("| Hough fit beats the 1-DOF line on the hillside (vertical SICK) | ground recall %.2f%% vs "
+              "%.2f%%, ground precision %.2f%% vs %.2f%% | %s |\n",
+              100.0 * hough->groundRecall(), 100.0 * one_dof->groundRecall(), 100.0 * hough->groundPrecision(),
+              100.0 * one_dof->groundPrecision(), ok ? "yes" : "NO");
+    }
+  }
+  if (checked > 0) {
+    emit("\nThesis findings (a baseline fails: an accuracy >= %.0f points below vertical_scan's; holds up: "
+         "none more than %.0f point below), %d of %d reproduced:\n\n"
+         "| finding | measured | reproduced |\n|---|---|---|\n",
+         kFailPoints, kHoldPoints, reproduced, checked);
+    for (const std::string& f : findings) emit("%s", f.c_str());
+    if (reproduced < checked && status == 0) status = 3;
   }
   if (!markdown_path.empty()) {
     const std::string tmp = markdown_path + ".tmp";
