@@ -98,6 +98,11 @@ class ElevationRowTable {
     f = f < 0.f ? 0.f : (f > max_cell_ ? max_cell_ : f);
     return lut_[static_cast<int>(f)];
   }
+  // The table itself, for vectorised lookups that repeat row()'s arithmetic lane by lane.
+  const uint8_t* lut() const { return lut_.data(); }
+  float tMin() const { return t_min_; }
+  float invCell() const { return inv_cell_; }
+  float maxCell() const { return max_cell_; }
 
  private:
   std::vector<uint8_t> lut_;
@@ -229,16 +234,20 @@ class VerticalScanGround : public GroundModel {
   // Per-scan workspace, reused.
   ScratchBuffer<float> r_;        // horizontal distance per input point (ground frame)
   ScratchBuffer<float> height_;   // height per input point (ground frame)
-  ScratchBuffer<uint32_t> bin_;   // bin per input point, kInvalidBin for unknown
+  ScratchBuffer<uint32_t> bin_;   // bin per input point, unknown_bin_ for unknown returns
+  uint32_t unknown_bin_ = 0;      // one past the bin grid
   std::vector<uint32_t> bin_start_;   // counting sort of points by bin
-  ScratchBuffer<uint64_t> order_;  // valid points by bin, each as rangeKey(r, index)
+  ScratchBuffer<uint32_t> order_;  // valid points by bin (input order within a bin)
+  ScratchBuffer<float> order_r_;   // their r, alike (padded for 4-wide reads past a bin)
+  std::vector<uint64_t> big_bin_;  // rangeKey()s of one large bin (median by selection)
   std::vector<float> atan_lut_;   // atan(t), t in [0, 1], in column units
   float octant_offset_[8] = {}, octant_sign_[8] = {};  // atan2 = offset + sign * atan LUT
-  std::vector<float> col_r_, col_h_, col_w_;   // one column's representatives
+  ScratchBuffer<float> col_r_, col_h_;         // each column's representatives
+  std::vector<float> col_w_;
   std::vector<float> knot_height_;             // columns_ x knots_
   std::vector<float> knot_support_;            // columns_ x knots_
   std::vector<float> coupled_;                 // columns_ x knots_
-  std::vector<float> rep_r_, rep_h_;           // bin representative (r < 0: empty bin)
+  std::vector<float> rep_;  // bin representatives' (r, height) pairs, r < 0: empty bin
   std::vector<float> column_slope_;            // straight estimate per column
   std::vector<int> column_support_;
   std::vector<int> column_count_;

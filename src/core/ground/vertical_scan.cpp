@@ -6,13 +6,16 @@
 #include <cstring>
 #include <limits>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 #include "ladar_perception/cloud/laser_elevations.h"
 
 namespace ladar_perception {
 
 namespace {
 
-constexpr uint32_t kInvalidBin = std::numeric_limits<uint32_t>::max();
 constexpr float kPi = 3.14159265358979f;
 constexpr int kMaxRingRows = 128;   // rows of the bin grid when the cloud carries `ring`
 constexpr float kMinR = 0.05f;      // horizontal distance floor for Height / r [m]
@@ -32,12 +35,88 @@ inline void insertionSort(K* keys, int n) {
   }
 }
 
+// Zeroes n words with vector stores (no memset: its `rep stos` costs one counted instruction
+// per byte under callgrind, the yardstick of the speed target).
+inline void zeroFill(uint32_t* p, std::size_t n) {
+  std::size_t i = 0;
+#if defined(__SSE2__)
+  const __m128i zero = _mm_setzero_si128();
+  for (; i + 4 <= n; i += 4) _mm_storeu_si128(reinterpret_cast<__m128i*>(p + i), zero);
+#endif
+  for (; i < n; ++i) p[i] = 0;
+}
+
 // A point's sort key within its bin: the bits of r > 0 (which order like the floats) above the
 // point index, so one integer comparison orders by r and then by input order.
 inline uint64_t rangeKey(float r, uint32_t index) {
   uint32_t bits;
   std::memcpy(&bits, &r, 4);
   return (static_cast<uint64_t>(bits) << 32) | index;
+}
+
+// The position of the lower median of r[0..n) ordered by (r, position), n <= kMaxRankBin: the
+// position whose rank (the number of entries before it in that order) is (n - 1) / 2. Reads
+// kMaxRankBin floats from r.
+constexpr int kMaxRankBin = 32;
+
+inline int lowerMedianPositionByRank(const float* r, int n) {
+  const int mid = (n - 1) / 2;
+  for (int p = 0; p < n; ++p) {
+    int rank = 0;
+    for (int q = 0; q < n; ++q) rank += r[q] < r[p] || (r[q] == r[p] && q < p);
+    if (rank == mid) return p;
+  }
+  return mid;  // unreachable: exactly one position has rank mid
+}
+
+#if defined(__SSE2__)
+// NV = ceil(n / 4) vectors. The number of strictly smaller entries of every position at once;
+// the positions where it equals mid hold the median's value, and the earliest position with
+// that value has rank mid. When no position has exactly mid smaller entries, a run of equal
+// values straddles the median: the exact rank test decides.
+template <int NV>
+inline int lowerMedianPositionSse(const float* r, int n) {
+  const int mid = (n - 1) / 2;
+  __m128 v[NV];
+  __m128i less[NV];
+  for (int k = 0; k < NV; ++k) {
+    v[k] = _mm_loadu_ps(r + 4 * k);
+    less[k] = _mm_setzero_si128();
+  }
+  for (int q = 0; q < n; ++q) {
+    const __m128 rq = _mm_set1_ps(r[q]);
+    for (int k = 0; k < NV; ++k) less[k] = _mm_sub_epi32(less[k], _mm_castps_si128(_mm_cmplt_ps(rq, v[k])));
+  }
+  const __m128i v_mid = _mm_set1_epi32(mid);
+  unsigned at_mid = 0;
+  for (int k = 0; k < NV; ++k) {
+    at_mid |= static_cast<unsigned>(_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(less[k], v_mid))))
+              << (4 * k);
+  }
+  const unsigned in_bin = n >= 32 ? ~0u : (1u << n) - 1u;
+  at_mid &= in_bin;
+  if (at_mid == 0) return lowerMedianPositionByRank(r, n);
+  const __m128 value = _mm_set1_ps(r[__builtin_ctz(at_mid)]);
+  unsigned equal = 0;
+  for (int k = 0; k < NV; ++k) {
+    equal |= static_cast<unsigned>(_mm_movemask_ps(_mm_cmpeq_ps(v[k], value))) << (4 * k);
+  }
+  return __builtin_ctz(equal & in_bin);
+}
+#endif
+
+inline int lowerMedianPosition(const float* r, int n) {
+  if (n <= 2) return n == 2 && r[1] < r[0] ? 1 : 0;
+#if defined(__SSE2__)
+  if (n <= 4) return lowerMedianPositionSse<1>(r, n);
+  if (n <= 8) return lowerMedianPositionSse<2>(r, n);
+  if (n <= 12) return lowerMedianPositionSse<3>(r, n);
+  if (n <= 16) return lowerMedianPositionSse<4>(r, n);
+  if (n <= 24) return lowerMedianPositionSse<6>(r, n);
+  return lowerMedianPositionSse<8>(r, n);
+#else
+  return lowerMedianPositionByRank(r, n);
+#endif
 }
 
 // Sorts keys ascending and permutes vals alike (small, nearly sorted arrays).
@@ -192,7 +271,10 @@ float estimateSlope(const float* r, const float* height, int n, const VerticalSc
     }
     if (!(sum_w > 0.f)) break;
     // Eqs 3.8-3.9: normalised weights, weighted mean slope.
-    estimate = sum_ws / sum_w;
+    const float next = sum_ws / sum_w;
+    // At the fixed point every further iteration returns the same value: stop early.
+    if (next == estimate) break;
+    estimate = next;
   }
   return estimate;
 }
@@ -273,20 +355,38 @@ int trackGroundLine(const float* r, const float* height, int n, const VerticalSc
   // Sample the polyline at the knots.
   const float L = p.segment_length;
   int j = 0;
-  for (int k = 0; k < knots; ++k) {
+  int k = 0;
+  for (; k < knots; ++k) {
     const float rk = static_cast<float>(k) * L;
     while (j + 1 < m && gr[j + 1] < rk) ++j;
-    float h;
-    float dist;
-    if (j + 1 < m) {
-      const float t = (rk - gr[j]) / std::max(gr[j + 1] - gr[j], 1e-3f);
-      h = gh[j] + (gh[j + 1] - gh[j]) * std::min(std::max(t, 0.f), 1.f);
-      dist = std::min(rk - gr[j], gr[j + 1] - rk);
-    } else {
-      h = gh[m - 1] + slope * (rk - gr[m - 1]);
-      dist = rk - gr[m - 1];
-    }
+    if (j + 1 >= m) break;  // beyond the last ground return: the extrapolated tail below
+    const float t = (rk - gr[j]) / std::max(gr[j + 1] - gr[j], 1e-3f);
+    const float h = gh[j] + (gh[j + 1] - gh[j]) * std::min(std::max(t, 0.f), 1.f);
+    const float dist = std::min(rk - gr[j], gr[j + 1] - rk);
     knot_height[k] = h;
+    knot_support[k] = 1.f / (1.f + std::max(dist, 0.f));
+  }
+  // The tail: the line extrapolated from the last ground return with the current slope.
+  const float last_r = gr[m - 1], last_h = gh[m - 1];
+#if defined(__SSE2__)
+  {
+    const __m128 v_L = _mm_set1_ps(L), v_last_r = _mm_set1_ps(last_r);
+    const __m128 v_last_h = _mm_set1_ps(last_h), v_slope = _mm_set1_ps(slope);
+    const __m128 v_zero = _mm_setzero_ps(), v_one = _mm_set1_ps(1.f);
+    for (; k + 4 <= knots; k += 4) {
+      const __m128 rk = _mm_mul_ps(_mm_cvtepi32_ps(_mm_setr_epi32(k, k + 1, k + 2, k + 3)), v_L);
+      const __m128 dist = _mm_sub_ps(rk, v_last_r);
+      _mm_storeu_ps(knot_height + k, _mm_add_ps(v_last_h, _mm_mul_ps(v_slope, dist)));
+      // std::max(dist, 0.f) is dist < 0 ? 0 : dist, i.e. maxps(0, dist).
+      _mm_storeu_ps(knot_support + k,
+                    _mm_div_ps(v_one, _mm_add_ps(v_one, _mm_max_ps(v_zero, dist))));
+    }
+  }
+#endif
+  for (; k < knots; ++k) {
+    const float rk = static_cast<float>(k) * L;
+    const float dist = rk - last_r;
+    knot_height[k] = last_h + slope * dist;
     knot_support[k] = 1.f / (1.f + std::max(dist, 0.f));
   }
   return m - 1;
@@ -387,6 +487,7 @@ void VerticalScanGround::binPoints(const PointCloudView& view, const SensorPose&
   std::memcpy(octant_offset, octant_offset_, sizeof(octant_offset));
   std::memcpy(octant_sign, octant_sign_, sizeof(octant_sign));
   const int shift = row_shift_;
+  const uint32_t unknown_bin = unknown_bin_;
   uint32_t* __restrict count = bin_start_.data() + 1;
   uint32_t* __restrict bins = bin_.data();
   float* __restrict rr = r_.data();
@@ -402,7 +503,123 @@ void VerticalScanGround::binPoints(const PointCloudView& view, const SensorPose&
   }
   const uint8_t* base = kFastXYZ ? view.pointData(0) : nullptr;
   const std::size_t step = view.layout().point_step;
-  for (std::size_t i = 0; i < n; ++i) {
+  std::size_t i = 0;
+#if defined(__SSE2__)
+  // Four points at a time (SSE2, the x86-64 baseline) when x, y, z are consecutive floats and a
+  // 16-byte read from x stays inside the point. Every lane repeats the scalar loop's arithmetic
+  // below operation for operation, so the bins, r and heights are bit-identical to it.
+  if (kFastXYZ && !kTilted && y_off == x_off + 4 && z_off == x_off + 8 && x_off + 16 <= step) {
+    const __m128 v_min_r2 = _mm_set1_ps(min_r2), v_max_r2 = _mm_set1_ps(max_r2);
+    const __m128 v_tz = _mm_set1_ps(t.z());
+    const __m128 v_min_r = _mm_set1_ps(kMinR);
+    const __m128 v_t_min = _mm_set1_ps(row_table.tMin());
+    const __m128 v_inv_cell = _mm_set1_ps(row_table.invCell());
+    const __m128 v_max_cell = _mm_set1_ps(row_table.maxCell());
+    const __m128 v_zero = _mm_setzero_ps();
+    const __m128 v_cells = _mm_set1_ps(static_cast<float>(kAtanCells));
+    const __m128 v_half = _mm_set1_ps(0.5f);
+    const __m128 v_max_c = _mm_set1_ps(max_c);
+    const __m128 v_abs = _mm_castsi128_ps(_mm_set1_epi32(0x7fffffff));
+    const __m128i v_shift = _mm_cvtsi32_si128(shift);
+    const __m128i v_unknown_bin = _mm_set1_epi32(static_cast<int>(unknown_bin));
+    const uint8_t* __restrict row_lut = row_table.lut();
+    const uint8_t* src = base + x_off;
+    alignas(16) int32_t row_i[4], lut_i[4];
+    const float quarter = 0.25f * static_cast<float>(columns_);
+    const __m128 v_quarter = _mm_set1_ps(quarter), v_half_turn = _mm_set1_ps(2.f * quarter);
+    const __m128 v_sign_bit = _mm_castsi128_ps(_mm_set1_epi32(static_cast<int>(0x80000000u)));
+    alignas(16) uint32_t bin4[4];
+    for (; i + 4 <= n; i += 4) {
+      const uint8_t* pt = src + i * step;
+      __m128 X = _mm_loadu_ps(reinterpret_cast<const float*>(pt));
+      __m128 Y = _mm_loadu_ps(reinterpret_cast<const float*>(pt + step));
+      __m128 Z = _mm_loadu_ps(reinterpret_cast<const float*>(pt + 2 * step));
+      const __m128 W = _mm_loadu_ps(reinterpret_cast<const float*>(pt + 3 * step));
+      {
+        // Transpose: X, Y, Z become the four points' x, y and z.
+        const __m128 t0 = _mm_unpacklo_ps(X, Y), t1 = _mm_unpackhi_ps(X, Y);
+        const __m128 t2 = _mm_unpacklo_ps(Z, W), t3 = _mm_unpackhi_ps(Z, W);
+        X = _mm_movelh_ps(t0, t2);
+        Y = _mm_movehl_ps(t2, t0);
+        Z = _mm_movelh_ps(t1, t3);
+      }
+      const __m128 rs2 = _mm_add_ps(_mm_mul_ps(X, X), _mm_mul_ps(Y, Y));
+      const __m128 d2 = _mm_add_ps(rs2, _mm_mul_ps(Z, Z));
+      const __m128 valid = _mm_and_ps(_mm_cmpge_ps(d2, v_min_r2), _mm_cmple_ps(d2, v_max_r2));
+      const int valid_bits = _mm_movemask_ps(valid);
+      if (valid_bits == 0) {
+        for (int l = 0; l < 4; ++l) {
+          bins[i + l] = unknown_bin;
+          rr[i + l] = 0.f;
+          hh[i + l] = 0.f;
+          labels[i + l] = kLabelUnknown;
+          prob[i + l] = 0.f;
+        }
+        count[unknown_bin] += 4;
+        continue;
+      }
+      const __m128i valid_i = _mm_castps_si128(valid);
+      // r (clamped at kMinR as below: maxps(a, b) = a > b ? a : b) and the row from z / r.
+      const __m128 rc = _mm_max_ps(_mm_sqrt_ps(rs2), v_min_r);
+      __m128 f = _mm_mul_ps(_mm_sub_ps(_mm_div_ps(Z, rc), v_t_min), v_inv_cell);
+      f = _mm_min_ps(_mm_max_ps(f, v_zero), v_max_cell);
+      // Column: octant reduction and the atan LUT index (0 for invalid lanes).
+      const __m128 ax = _mm_and_ps(X, v_abs), ay = _mm_and_ps(Y, v_abs);
+      const __m128 steep = _mm_cmpgt_ps(ay, ax);
+      const __m128 mx = _mm_or_ps(_mm_and_ps(steep, ay), _mm_andnot_ps(steep, ax));
+      const __m128 mn = _mm_or_ps(_mm_and_ps(steep, ax), _mm_andnot_ps(steep, ay));
+      const __m128 tt = _mm_and_ps(_mm_div_ps(mn, mx), _mm_cmpgt_ps(mx, v_zero));
+      // The octant's offset and sign as setParams() builds octant_offset_/octant_sign_:
+      // offset = steep ? q : 0, then 2q - offset for x < 0, -offset for y < 0, + 2q; the sign
+      // (+-1, so sign * lut only flips lut's sign bit) flips with each of the three.
+      const __m128 neg_x = _mm_cmplt_ps(X, v_zero), neg_y = _mm_cmplt_ps(Y, v_zero);
+      __m128 off = _mm_and_ps(steep, v_quarter);
+      off = _mm_or_ps(_mm_and_ps(neg_x, _mm_sub_ps(v_half_turn, off)), _mm_andnot_ps(neg_x, off));
+      off = _mm_or_ps(_mm_and_ps(neg_y, _mm_sub_ps(v_zero, off)), _mm_andnot_ps(neg_y, off));
+      off = _mm_add_ps(off, v_half_turn);
+      const __m128 flip = _mm_and_ps(_mm_xor_ps(_mm_xor_ps(steep, neg_x), neg_y), v_sign_bit);
+      _mm_store_si128(reinterpret_cast<__m128i*>(row_i), _mm_and_si128(_mm_cvttps_epi32(f), valid_i));
+      _mm_store_si128(
+          reinterpret_cast<__m128i*>(lut_i),
+          _mm_and_si128(_mm_cvttps_epi32(_mm_add_ps(_mm_mul_ps(tt, v_cells), v_half)), valid_i));
+      const __m128 lut = _mm_setr_ps(atan_lut[lut_i[0]], atan_lut[lut_i[1]], atan_lut[lut_i[2]],
+                                     atan_lut[lut_i[3]]);
+      // a < max_c ? a : max_c is minps(a, max_c).
+      const __m128 a = _mm_min_ps(_mm_add_ps(off, _mm_xor_ps(lut, flip)), v_max_c);
+      __m128i row;
+      if (kRing) {
+        int ring[4];
+        for (int l = 0; l < 4; ++l) {
+          const int rg = view.ring(i + l);
+          ring[l] = rg < 0 ? 0 : (rg >= rows ? rows - 1 : rg);
+        }
+        row = _mm_setr_epi32(ring[0], ring[1], ring[2], ring[3]);
+      } else {
+        row = _mm_setr_epi32(row_lut[row_i[0]], row_lut[row_i[1]], row_lut[row_i[2]],
+                             row_lut[row_i[3]]);
+      }
+      __m128i bin = _mm_add_epi32(_mm_sll_epi32(_mm_cvttps_epi32(a), v_shift), row);
+      _mm_storeu_ps(rr + i, _mm_and_ps(rc, valid));
+      _mm_storeu_ps(hh + i, _mm_and_ps(_mm_add_ps(Z, v_tz), valid));
+      if (valid_bits != 0xF) {
+        bin = _mm_or_si128(_mm_and_si128(valid_i, bin), _mm_andnot_si128(valid_i, v_unknown_bin));
+        for (int l = 0; l < 4; ++l) {
+          if (!(valid_bits >> l & 1)) {
+            labels[i + l] = kLabelUnknown;
+            prob[i + l] = 0.f;
+          }
+        }
+      }
+      _mm_storeu_si128(reinterpret_cast<__m128i*>(bins + i), bin);
+      _mm_store_si128(reinterpret_cast<__m128i*>(bin4), bin);
+      ++count[bin4[0]];
+      ++count[bin4[1]];
+      ++count[bin4[2]];
+      ++count[bin4[3]];
+    }
+  }
+#endif
+  for (; i < n; ++i) {
     float xs, ys, zs;
     if (kFastXYZ) {
       const uint8_t* pt = base + i * step;
@@ -417,7 +634,10 @@ void VerticalScanGround::binPoints(const PointCloudView& view, const SensorPose&
     const float d2 = rs2 + zs * zs;
     // NaN compares false: NaN/Inf and out-of-range returns are unknown.
     if (!(d2 >= min_r2 && d2 <= max_r2)) {
-      bins[i] = kInvalidBin;
+      bins[i] = unknown_bin;
+      ++count[unknown_bin];
+      rr[i] = 0.f;
+      hh[i] = 0.f;
       labels[i] = kLabelUnknown;
       prob[i] = 0.f;
       continue;
@@ -472,7 +692,11 @@ void VerticalScanGround::classify(const PointCloudView& view, const SensorPose& 
   r_.resize(n);
   height_.resize(n);
   bin_.resize(n);
-  bin_start_.assign(bins + 1, 0);
+  // Bin `bins` (one past the grid) collects the unknown returns: counted and sorted like the
+  // others, so the counting sort needs no test, but never fitted.
+  unknown_bin_ = static_cast<uint32_t>(bins);
+  bin_start_.resize(bins + 2);
+  zeroFill(bin_start_.data(), bins + 2);
   if (n == 0) {
     // fitColumns() writes every knot; an empty scan leaves flat ground lines.
     std::fill(knot_height_.begin(), knot_height_.end(), 0.f);
@@ -501,22 +725,31 @@ void VerticalScanGround::classify(const PointCloudView& view, const SensorPose& 
 
   // Counting sort of the valid points by bin (3.3 step 1).
   uint32_t acc = 0;
-  for (std::size_t b = 0; b < bins; ++b) {
+  for (std::size_t b = 0; b <= bins; ++b) {
     const uint32_t c = bin_start_[b + 1];
     bin_start_[b] = acc;
     acc += c;
   }
-  bin_start_[bins] = acc;
+  bin_start_[bins + 1] = acc;
   order_.resize(acc);
+  order_r_.resize(acc + kMaxRankBin);  // readable floats past the last bin
   {
-    // Scatter; bin_start_[b] advances to the end of bin b, i.e. the start of bin b + 1.
+    // Scatter; bin_start_[b] advances to the end of bin b, i.e. the start of bin b + 1. Within
+    // a bin the points stay in input order.
+    uint32_t* __restrict order = order_.data();
+    float* __restrict order_r = order_r_.data();
+    uint32_t* __restrict start = bin_start_.data();
+    const uint32_t* __restrict bins_in = bin_.data();
+    const float* __restrict r_in = r_.data();
+#pragma GCC unroll 4
     for (std::size_t i = 0; i < n; ++i) {
-      const uint32_t b = bin_[i];
-      if (b == kInvalidBin) continue;
-      order_[bin_start_[b]++] = rangeKey(r_[i], static_cast<uint32_t>(i));
+      const uint32_t at = start[bins_in[i]]++;
+      order[at] = static_cast<uint32_t>(i);
+      order_r[at] = r_in[i];
     }
+    for (int k = 0; k < kMaxRankBin; ++k) order_r[acc + k] = 0.f;
     // Shift back: bin b spans [bin_start_[b-1], bin_start_[b]) now; restore starts.
-    for (std::size_t b = bins; b > 0; --b) bin_start_[b] = bin_start_[b - 1];
+    for (std::size_t b = bins + 1; b > 0; --b) bin_start_[b] = bin_start_[b - 1];
     bin_start_[0] = 0;
   }
   fitColumns();
@@ -529,8 +762,10 @@ void VerticalScanGround::fitColumns() {
   col_r_.resize(static_cast<std::size_t>(columns_) * rows);
   col_h_.resize(col_r_.size());
   col_w_.resize(2 * (static_cast<std::size_t>(rows) + 1));
-  rep_r_.assign(static_cast<std::size_t>(columns_) * rows, -1.f);
-  rep_h_.resize(rep_r_.size());
+  // (r, height) pairs per bin after a sentinel pair for bin -1, and one for bin `bins` after
+  // them; r = -1 marks an empty bin.
+  rep_.assign(2 * (static_cast<std::size_t>(columns_) * rows + 2), -1.f);
+  float* rep_rh = rep_.data() + 2;
   std::vector<int>& col_n = column_support_;
   std::vector<int>& col_count = column_count_;
   col_count.assign(columns_, 0);
@@ -547,20 +782,24 @@ void VerticalScanGround::fitColumns() {
       const uint32_t end = bin_start_[b + 1];
       if (begin == end) continue;
       const int cnt = static_cast<int>(end - begin);
-      // The lower median by (r, input order) of the bin's keys.
-      uint64_t* keys = &order_[begin];
-      const int mid = (cnt - 1) / 2;
-      if (cnt <= 48) {
-        insertionSort(keys, cnt);
+      // The lower median by (r, input order) of the bin's points.
+      uint32_t rep;
+      if (cnt <= kMaxRankBin) {
+        rep = order_[begin + lowerMedianPosition(&order_r_[begin], cnt)];
       } else {
-        // Large bins (slow spin, duplicated points): partial selection.
-        std::nth_element(keys, keys + mid, keys + cnt);
+        // Large bins (slow spin, duplicated points): partial selection on (r, index) keys.
+        big_bin_.resize(cnt);
+        for (int q = 0; q < cnt; ++q) {
+          big_bin_[q] = rangeKey(order_r_[begin + q], order_[begin + q]);
+        }
+        const int mid = (cnt - 1) / 2;
+        std::nth_element(big_bin_.begin(), big_bin_.begin() + mid, big_bin_.end());
+        rep = static_cast<uint32_t>(big_bin_[mid]);
       }
-      const uint32_t rep = static_cast<uint32_t>(keys[mid]);
       cr[m] = r_[rep];
       ch[m] = height_[rep];
-      rep_r_[b] = r_[rep];
-      rep_h_[b] = height_[rep];
+      rep_rh[2 * b] = r_[rep];
+      rep_rh[2 * b + 1] = height_[rep];
       ++m;
     }
     insertionSort(cr, ch, m);
@@ -629,7 +868,29 @@ void VerticalScanGround::fitColumns() {
       }
       float* dst = &coupled_[static_cast<std::size_t>(c) * K];
       dst[0] = 0.f;
-      for (int k = 1; k < K; ++k) {
+      int k = 1;
+#if defined(__SSE2__)
+      // Four knots at a time; every lane sums over j in the same order as the loop below.
+      {
+        const float* own_h = &knot_height_[static_cast<std::size_t>(c) * K];
+        const float* own_s = &knot_support_[static_cast<std::size_t>(c) * K];
+        const __m128 v_keep = _mm_set1_ps(0.66f), v_eps = _mm_set1_ps(1e-3f);
+        for (; k + 4 <= K; k += 4) {
+          __m128 sw = _mm_setzero_ps(), swh = _mm_setzero_ps();
+          for (int j = 0; j <= 2 * RR; ++j) {
+            const __m128 w = _mm_mul_ps(_mm_add_ps(_mm_loadu_ps(nb_support[j] + k), v_eps),
+                                        _mm_set1_ps(kernel[j]));
+            sw = _mm_add_ps(sw, w);
+            swh = _mm_add_ps(swh, _mm_mul_ps(w, _mm_loadu_ps(nb_height[j] + k)));
+          }
+          const __m128 keep = _mm_cmpge_ps(_mm_loadu_ps(own_s + k), v_keep);
+          const __m128 h = _mm_or_ps(_mm_and_ps(keep, _mm_loadu_ps(own_h + k)),
+                                     _mm_andnot_ps(keep, _mm_div_ps(swh, sw)));
+          _mm_storeu_ps(dst + k, h);
+        }
+      }
+#endif
+      for (; k < K; ++k) {
         // A knot within half a metre of the column's own ground return keeps its height.
         const std::size_t own = static_cast<std::size_t>(c) * K + k;
         if (knot_support_[own] >= 0.66f) {
@@ -669,17 +930,160 @@ void VerticalScanGround::labelPoints(GroundClassification* out) {
   const float g_per_m = tol.gnd_error_max_per_m;
   const float s_base = tol.slope_error_max_base;
   const float s_per_m = tol.slope_error_max_per_m;
-  const float* __restrict rep_r = rep_r_.data();
-  const float* __restrict rep_h = rep_h_.data();
+  const float* __restrict rep = rep_.data() + 2;  // rep[2b], rep[2b + 1]: bin b's r, height
   const float* __restrict knots = knot_height_.data();
   const uint32_t* __restrict bins = bin_.data();
   const float* __restrict rr = r_.data();
   const float* __restrict hh = height_.data();
   uint8_t* __restrict labels = out->labels.data();
   float* __restrict prob = out->p_obstacle.data();
-  for (std::size_t i = 0; i < n; ++i) {
+  // P_vertical of one return (see below), given its GndError factor g and eq 3.15's P.
+  auto vertical_probability = [&](uint32_t b, float r, float h, float g, float prob_i) {
+    const uint32_t row = b & (rows - 1);
+    float local = -1.f;
+    const float* lo = rep + 2 * (b - 1);  // the row below
+    const float* hi = rep + 2 * (b + 1);  // the row above
+    if (row > 0 && lo[0] >= 0.f) {
+      local = std::fabs(h - lo[1]) / (std::fabs(r - lo[0]) + 0.02f);
+    }
+    if (row + 1 < rows && hi[0] >= 0.f) {
+      const float sl = std::fabs(h - hi[1]) / (std::fabs(r - hi[0]) + 0.02f);
+      local = local < 0.f ? sl : (sl < local ? sl : local);
+    }
+    float v = local * inv_v_slope;
+    v = v < 1.f ? v : 1.f;
+    const float pv = g * v;
+    return pv > prob_i ? pv : prob_i;
+  };
+  std::size_t i = 0;
+#if defined(__SSE2__)
+  // Four returns at a time, each lane repeating the scalar loop's arithmetic below (minps(a, b)
+  // is a < b ? a : b); the knot index col * K + k is formed in float, exact below 2^24.
+  if (static_cast<double>(columns_) * K < 16777216.0) {
+    const __m128 v_inv_seg = _mm_set1_ps(inv_seg);
+    const __m128 v_last_k = _mm_set1_ps(static_cast<float>(last_k));
+    const __m128 v_K = _mm_set1_ps(static_cast<float>(K));
+    const __m128 v_zero = _mm_setzero_ps(), v_one = _mm_set1_ps(1.f);
+    const __m128 v_abs = _mm_castsi128_ps(_mm_set1_epi32(0x7fffffff));
+    const __m128 v_sign = _mm_castsi128_ps(_mm_set1_epi32(static_cast<int>(0x80000000u)));
+    const __m128 v_g_above = _mm_set1_ps(g_above), v_g_below = _mm_set1_ps(g_below);
+    const __m128 v_g_per_m = _mm_set1_ps(g_per_m);
+    const __m128 v_s_base = _mm_set1_ps(s_base), v_s_per_m = _mm_set1_ps(s_per_m);
+    const __m128 v_thr = _mm_set1_ps(thr), v_inv_v_gnd = _mm_set1_ps(inv_v_gnd);
+    const __m128i v_invalid = _mm_set1_epi32(static_cast<int>(unknown_bin_));
+    const __m128i v_shift = _mm_cvtsi32_si128(shift);
+    // Label bytes of four lanes from their obstacle bits and their unknown bits.
+    static_assert(kLabelGround == 0, "label bytes assume ground = 0");
+    uint32_t obstacle_bytes[16], unknown_bytes[16];
+    for (int m = 0; m < 16; ++m) {
+      obstacle_bytes[m] = unknown_bytes[m] = 0;
+      for (int l = 0; l < 4; ++l) {
+        if (m >> l & 1) {
+          obstacle_bytes[m] |= static_cast<uint32_t>(kLabelObstacle) << (8 * l);
+          unknown_bytes[m] |= static_cast<uint32_t>(kLabelUnknown) << (8 * l);
+        }
+      }
+    }
+    alignas(16) int32_t knot_i[4];
+    const __m128i v_row_mask = _mm_set1_epi32(static_cast<int>(rows - 1));
+    const __m128i v_invalid_all = _mm_set1_epi32(-1);
+    const __m128 v_pad = _mm_set1_ps(0.02f), v_minus_one = _mm_set1_ps(-1.f);
+    const __m128 v_inv_v_slope = _mm_set1_ps(inv_v_slope);
+    for (; i + 4 <= n; i += 4) {
+      const __m128i b = _mm_loadu_si128(reinterpret_cast<const __m128i*>(bins + i));
+      const __m128i invalid = _mm_cmpeq_epi32(b, v_invalid);
+      const int invalid_bits = _mm_movemask_ps(_mm_castsi128_ps(invalid));
+      if (invalid_bits == 0xF) continue;  // binPoints labelled them unknown
+      const __m128 r = _mm_loadu_ps(rr + i);
+      const __m128 h = _mm_loadu_ps(hh + i);
+      // The column's ground line at r.
+      const __m128 col = _mm_cvtepi32_ps(_mm_srl_epi32(b, v_shift));
+      const __m128 f = _mm_mul_ps(r, v_inv_seg);
+      const __m128 kf = _mm_min_ps(_mm_cvtepi32_ps(_mm_cvttps_epi32(f)), v_last_k);
+      _mm_store_si128(reinterpret_cast<__m128i*>(knot_i),
+                      _mm_andnot_si128(invalid, _mm_cvttps_epi32(_mm_add_ps(_mm_mul_ps(col, v_K), kf))));
+      // Each lane's knot pair (kh[k], kh[k + 1]) in one 8-byte load, then deinterleaved.
+      const __m128 pair01 = _mm_unpacklo_ps(
+          _mm_loadl_pi(v_zero, reinterpret_cast<const __m64*>(knots + knot_i[0])),
+          _mm_loadl_pi(v_zero, reinterpret_cast<const __m64*>(knots + knot_i[1])));
+      const __m128 pair23 = _mm_unpacklo_ps(
+          _mm_loadl_pi(v_zero, reinterpret_cast<const __m64*>(knots + knot_i[2])),
+          _mm_loadl_pi(v_zero, reinterpret_cast<const __m64*>(knots + knot_i[3])));
+      const __m128 k0 = _mm_movelh_ps(pair01, pair23);  // kh[k] of lanes 0..3
+      const __m128 k1 = _mm_movehl_ps(pair23, pair01);  // kh[k + 1] of lanes 0..3
+      const __m128 ground = _mm_add_ps(k0, _mm_mul_ps(_mm_sub_ps(k1, k0), _mm_sub_ps(f, kf)));
+      // Eqs 3.10, 3.11, 3.15 as below.
+      __m128 gnd_error = _mm_sub_ps(ground, h);
+      if (!negative) gnd_error = _mm_andnot_ps(_mm_cmpgt_ps(gnd_error, v_zero), gnd_error);
+      const __m128 abs_error = _mm_and_ps(gnd_error, v_abs);
+      const __m128 above = _mm_cmpgt_ps(gnd_error, v_zero);
+      const __m128 g_max =
+          _mm_add_ps(_mm_or_ps(_mm_and_ps(above, v_g_below), _mm_andnot_ps(above, v_g_above)),
+                     _mm_mul_ps(v_g_per_m, r));
+      const __m128 s_max = _mm_add_ps(v_s_base, _mm_mul_ps(v_s_per_m, r));
+      const __m128 gt = _mm_min_ps(_mm_div_ps(abs_error, g_max), v_one);
+      const __m128 st = _mm_min_ps(_mm_div_ps(abs_error, _mm_mul_ps(r, s_max)), v_one);
+      __m128 p4v = _mm_mul_ps(gt, st);
+      if (vertical) {
+        const __m128 g = _mm_min_ps(_mm_mul_ps(_mm_xor_ps(gnd_error, v_sign), v_inv_v_gnd), v_one);
+        const __m128 need = _mm_and_ps(_mm_cmplt_ps(gnd_error, v_zero),
+                                       _mm_and_ps(_mm_cmpgt_ps(g, v_thr), _mm_cmpgt_ps(g, p4v)));
+        const int need_bits = _mm_movemask_ps(need) & ~invalid_bits;
+        if (need_bits) {
+          // vertical_probability() on four lanes; the sentinel pairs keep the reads of rows
+          // below and above in bounds (unknown lanes read bin 0's).
+          const __m128i bv = _mm_andnot_si128(invalid, b);
+          alignas(16) uint32_t b4[4];
+          _mm_store_si128(reinterpret_cast<__m128i*>(b4), bv);
+          const __m128 lo01 = _mm_unpacklo_ps(
+              _mm_loadl_pi(v_zero, reinterpret_cast<const __m64*>(rep + 2 * b4[0] - 2)),
+              _mm_loadl_pi(v_zero, reinterpret_cast<const __m64*>(rep + 2 * b4[1] - 2)));
+          const __m128 lo23 = _mm_unpacklo_ps(
+              _mm_loadl_pi(v_zero, reinterpret_cast<const __m64*>(rep + 2 * b4[2] - 2)),
+              _mm_loadl_pi(v_zero, reinterpret_cast<const __m64*>(rep + 2 * b4[3] - 2)));
+          const __m128 hi01 = _mm_unpacklo_ps(
+              _mm_loadl_pi(v_zero, reinterpret_cast<const __m64*>(rep + 2 * b4[0] + 2)),
+              _mm_loadl_pi(v_zero, reinterpret_cast<const __m64*>(rep + 2 * b4[1] + 2)));
+          const __m128 hi23 = _mm_unpacklo_ps(
+              _mm_loadl_pi(v_zero, reinterpret_cast<const __m64*>(rep + 2 * b4[2] + 2)),
+              _mm_loadl_pi(v_zero, reinterpret_cast<const __m64*>(rep + 2 * b4[3] + 2)));
+          const __m128 r_lo = _mm_movelh_ps(lo01, lo23), h_lo = _mm_movehl_ps(lo23, lo01);
+          const __m128 r_hi = _mm_movelh_ps(hi01, hi23), h_hi = _mm_movehl_ps(hi23, hi01);
+          const __m128i row = _mm_and_si128(bv, v_row_mask);
+          const __m128 has_lo = _mm_and_ps(_mm_castsi128_ps(_mm_cmpgt_epi32(row, _mm_setzero_si128())),
+                                           _mm_cmpge_ps(r_lo, v_zero));
+          const __m128 has_hi = _mm_and_ps(_mm_castsi128_ps(_mm_cmplt_epi32(row, v_row_mask)),
+                                           _mm_cmpge_ps(r_hi, v_zero));
+          const __m128 sl_lo = _mm_div_ps(_mm_and_ps(_mm_sub_ps(h, h_lo), v_abs),
+                                          _mm_add_ps(_mm_and_ps(_mm_sub_ps(r, r_lo), v_abs), v_pad));
+          const __m128 sl_hi = _mm_div_ps(_mm_and_ps(_mm_sub_ps(h, h_hi), v_abs),
+                                          _mm_add_ps(_mm_and_ps(_mm_sub_ps(r, r_hi), v_abs), v_pad));
+          // Both: the smaller (minps(sl_hi, sl_lo) = sl_hi < sl_lo ? sl_hi : sl_lo); one of
+          // them: that one; neither: -1.
+          const __m128 one_side = _mm_or_ps(_mm_and_ps(has_lo, sl_lo),
+                                            _mm_andnot_ps(has_lo, _mm_or_ps(_mm_and_ps(has_hi, sl_hi),
+                                                                            _mm_andnot_ps(has_hi, v_minus_one))));
+          const __m128 both = _mm_and_ps(has_lo, has_hi);
+          const __m128 local = _mm_or_ps(_mm_and_ps(both, _mm_min_ps(sl_hi, sl_lo)),
+                                         _mm_andnot_ps(both, one_side));
+          const __m128 v = _mm_min_ps(_mm_mul_ps(local, v_inv_v_slope), v_one);
+          // pv > prob ? pv : prob is maxps(pv, prob).
+          const __m128 with_pv = _mm_max_ps(_mm_mul_ps(g, v), p4v);
+          const __m128 take = _mm_and_ps(need, _mm_castsi128_ps(_mm_andnot_si128(invalid, v_invalid_all)));
+          p4v = _mm_or_ps(_mm_and_ps(take, with_pv), _mm_andnot_ps(take, p4v));
+        }
+      }
+      p4v = _mm_andnot_ps(_mm_castsi128_ps(invalid), p4v);  // unknown: 0 as binPoints wrote
+      _mm_storeu_ps(prob + i, p4v);
+      const int obstacle_bits = _mm_movemask_ps(_mm_cmpgt_ps(p4v, v_thr)) & ~invalid_bits;
+      const uint32_t label4 = obstacle_bytes[obstacle_bits] | unknown_bytes[invalid_bits];
+      std::memcpy(labels + i, &label4, 4);
+    }
+  }
+#endif
+  for (; i < n; ++i) {
     const uint32_t b = bins[i];
-    if (b == kInvalidBin) continue;
+    if (b == unknown_bin_) continue;
     const uint32_t col = b >> shift;
     const float* kh = knots + static_cast<std::size_t>(col) * K;
     const float r = rr[i];
@@ -707,21 +1111,7 @@ void VerticalScanGround::labelPoints(GroundClassification* out) {
       // the threshold (its GndError factor exceeds it), 0 elsewhere.
       float g = -gnd_error * inv_v_gnd;
       g = g < 1.f ? g : 1.f;
-      if (g > thr && g > prob_i) {
-        const uint32_t row = b & (rows - 1);
-        float local = -1.f;
-        if (row > 0 && rep_r[b - 1] >= 0.f) {
-          local = std::fabs(h - rep_h[b - 1]) / (std::fabs(r - rep_r[b - 1]) + 0.02f);
-        }
-        if (row + 1 < rows && rep_r[b + 1] >= 0.f) {
-          const float sl = std::fabs(h - rep_h[b + 1]) / (std::fabs(r - rep_r[b + 1]) + 0.02f);
-          local = local < 0.f ? sl : (sl < local ? sl : local);
-        }
-        float v = local * inv_v_slope;
-        v = v < 1.f ? v : 1.f;
-        const float pv = g * v;
-        prob_i = pv > prob_i ? pv : prob_i;
-      }
+      if (g > thr && g > prob_i) prob_i = vertical_probability(b, r, h, g, prob_i);
     }
     prob[i] = prob_i;
     labels[i] = prob_i > thr ? kLabelObstacle : kLabelGround;
