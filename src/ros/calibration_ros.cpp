@@ -235,7 +235,7 @@ void CalibrationRos::drainPending(const ros::TimerEvent&) {
         // Waited too long, or stamped far ahead of the clock (a bag that looped back in time:
         // tf has cleared its buffer and that pose will not come).
         if ((now - p.stamp).toSec() > tf_wait_ || (p.stamp - now).toSec() > tf_wait_) {
-          health_.tfLookupFailed("Calibration: no vehicle pose " + odom_frame_ + " -> " +
+          health_.tfLookupFailed("no vehicle pose " + odom_frame_ + " -> " +
                                  base_frame_ + " at a " + (k ? "target" : "reference") +
                                  " scan's stamp within " + std::to_string(tf_wait_) +
                                  " s; scan dropped (" + why + ")");

@@ -72,7 +72,7 @@ HoughGroundRos::HoughGroundRos(ros::NodeHandle nh, ros::NodeHandle private_nh)
   use_tf_ = private_nh_.param("use_tf", true);
   mount_roll_ = private_nh_.param("mount_roll", mount_roll_);
   mount_pitch_ = private_nh_.param("mount_pitch", mount_pitch_);
-  const int queue_size = private_nh_.param("queue_size", 5);
+  const int queue_size = private_nh_.param("queue_size", 15);
   const double tf_tolerance = private_nh_.param("tf_tolerance", 0.0);
   expected_rate_min_ = private_nh_.param("expected_rate_min", 50.0);
   expected_rate_max_ = private_nh_.param("expected_rate_max", 100.0);
