@@ -455,6 +455,74 @@ TEST(VerticalScanModel, ReusedAcrossScansGivesTheSameLabels) {
   EXPECT_EQ(a.p_obstacle, b.p_obstacle);
 }
 
+// The binning reads four points at a time when x, y, z are consecutive float32 and 16 bytes
+// from x stay inside the point, and point by point otherwise; both must give the same labels
+// and P(obstacle) bit for bit. Noisy returns (medians of unequal ranges), NaN and out-of-range
+// returns, and a point count that is not a multiple of four.
+TEST(VerticalScanModel, FourWideAndPointwiseBinningAgree) {
+  const SyntheticScan& s = scan();
+  const std::size_t n = s.size() - 3;
+  uint32_t state = 12345u;
+  auto noise = [&state]() {  // uniform in [-0.03, 0.03)
+    state = state * 1664525u + 1013904223u;
+    return (static_cast<float>(state >> 8) / 16777216.f - 0.5f) * 0.06f;
+  };
+  std::vector<float> x(n), y(n), z(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    x[i] = s.x[i] + noise();
+    y[i] = s.y[i] + noise();
+    z[i] = s.z[i] + noise();
+    if (i % 997 == 5) x[i] = std::numeric_limits<float>::quiet_NaN();
+    if (i % 1013 == 7) { x[i] *= 0.01f; y[i] *= 0.01f; z[i] = 0.2f; }  // closer than min_range
+  }
+  auto make = [&](bool four_wide, bool ring) {
+    CloudLayout l = ring ? velodyneXYZIRTLayout(static_cast<uint32_t>(n))
+                         : xyziLayout(static_cast<uint32_t>(n));
+    if (!four_wide) {
+      // x, y, z float32 only (12 bytes; ring adds 2): read point by point.
+      l = xyziLayout(static_cast<uint32_t>(n));
+      l.fields.clear();
+      l.point_step = 0;
+      appendField(&l, "x", FieldType::kFloat32);
+      appendField(&l, "y", FieldType::kFloat32);
+      appendField(&l, "z", FieldType::kFloat32);
+      if (ring) appendField(&l, "ring", FieldType::kUInt16);
+      l.row_step = l.point_step * l.width;
+    }
+    PackedCloud c;
+    c.layout = l;
+    c.data.assign(static_cast<std::size_t>(l.row_step) * l.height, 0);
+    for (std::size_t i = 0; i < n; ++i) {
+      uint8_t* pt = c.data.data() + i * l.point_step;
+      for (const FieldDesc& f : l.fields) {
+        if (f.name == "x") writeField(pt, f, x[i]);
+        else if (f.name == "y") writeField(pt, f, y[i]);
+        else if (f.name == "z") writeField(pt, f, z[i]);
+        else if (f.name == "ring") writeField(pt, f, s.ring[i]);
+      }
+    }
+    return c;
+  };
+  for (bool ring : {false, true}) {
+    const PackedCloud wide = make(true, ring), narrow = make(false, ring);
+    ASSERT_LT(narrow.layout.point_step, 16u);
+    for (const VerticalScanParams& p : {verticalScanDefaultParams(), verticalScanThesisParams()}) {
+      PointCloudView vw, vn;
+      ASSERT_TRUE(wide.view(&vw));
+      ASSERT_TRUE(narrow.view(&vn));
+      VerticalScanGround mw(p), mn(p);
+      GroundClassification a, b;
+      mw.classify(vw, SensorPose::fromHeight(kSensorHeight), &a);
+      mn.classify(vn, SensorPose::fromHeight(kSensorHeight), &b);
+      ASSERT_EQ(a.size(), n);
+      EXPECT_EQ(a.labels, b.labels) << "ring " << ring;
+      EXPECT_EQ(a.p_obstacle, b.p_obstacle) << "ring " << ring;
+      EXPECT_GT(a.count(kLabelObstacle), 500u);  // the box
+      EXPECT_GT(a.count(kLabelUnknown), 50u);
+    }
+  }
+}
+
 TEST(VerticalScanModel, OccludedColumnBorrowsItsNeighboursGround) {
   // Flat ground 0.5 m below the line the thesis would assume (a sensor reported 0.5 m too
   // high), with every return of a 6-degree wedge removed except a box face: the coupled
