@@ -255,11 +255,11 @@ TEST_F(HoughGroundTest, MissingTfIsReportedNotFatal) {
           }
         }
       });
-  ros::Publisher pub = nh.advertise<sensor_msgs::LaserScan>("scan", 5);
+  ros::Publisher pub = nh.advertise<sensor_msgs::LaserScan>("scan", 20);
   ASSERT_TRUE(waitFor([&] { return pub.getNumSubscribers() > 0; }));
   // The tf filter holds scans waiting for their transform and drops the oldest when its queue
-  // (queue_size, 5) overflows: at 75 Hz a scan waits at most 67 ms.
-  for (int i = 0; i < 8; ++i) {
+  // (queue_size, 15) overflows: at 75 Hz a scan waits at most 0.2 s.
+  for (int i = 0; i < 18; ++i) {
     pub.publish(sensor_msgs::LaserScanConstPtr(makeScan("no_such_frame").msg));
     ros::WallDuration(0.05).sleep();
   }
