@@ -15,6 +15,8 @@
 #include <string>
 #include <vector>
 
+#include <Eigen/Eigenvalues>
+
 #include "ladar_perception/calibration/experiment.h"
 #include "ladar_perception/io/image.h"
 
@@ -31,6 +33,13 @@ void usage() {
          "         [--method NAME] [--trials N] [--seed S] [--world NAME] [--json OUT]\n"
          "         [--plot OUT.png] [--noise table4.1|datasheet|none] [--poses N]\n"
          "         [--bin M] [--repeatability W] [--centre X,Y] [--disk] [--probe M] [--quiet]\n"
+         "         [--drive-speed M_PER_S] [--diagnose]\n"
+         "--drive-speed: the vehicle's speed between poses; a 2D ladar scans at its own rate\n"
+         "  along the way (default 2 m/s; 0 = 20 scans per segment, the old set-up)\n"
+         "--diagnose: per trial, the target's scans and points, the share of its points on\n"
+         "  objects (> 0.3 m above the ground at the truth), the 2D ground-line sweep's costs and\n"
+         "  the point-to-plane Hessian's eigenvalues and weakest eigenvectors at the truth and at\n"
+         "  the solution\n"
          "methods:";
   for (const std::string& m : cal::methodNames()) std::cerr << " " << m;
   std::cerr << " (default " << cal::defaultMethod() << ")\n";
@@ -125,6 +134,73 @@ std::string jsonNumber(double v) {
   return s.str();
 }
 
+// Hessian of the robust point-to-plane cost (refinement.h) at a hypothesis: eigenvalues per
+// correspondence (x, y, z in m^-2... unscaled: rotations in rad) and the three weakest directions.
+void printHessian(const char* where, const cal::SurfaceModel& model, const cal::ScanSet& target,
+                  const cal::Pose6& pose, const cal::CalibrationParams& params) {
+  const cal::Linearisation lin = cal::linearise(model, target, pose,
+                                                params.refinement.max_correspondence_end,
+                                                params.refinement.huber);
+  if (lin.correspondences <= 0) {
+    std::printf("          %s: no correspondences\n", where);
+    return;
+  }
+  Eigen::SelfAdjointEigenSolver<cal::Matrix6> es(lin.hessian / lin.correspondences);
+  std::printf("          %s: %ld correspondences of %zu points, robust cost over all %.5f, "
+              "Hessian eigenvalues per correspondence (m, rad):",
+              where, lin.correspondences, target.numPoints(),
+              cal::sparseTargetCost(lin, target.numPoints(), params.refinement));
+  for (int i = 0; i < 6; ++i) std::printf(" %.3g", es.eigenvalues()[i]);
+  std::printf("\n");
+  for (int k = 0; k < 3; ++k) {
+    std::printf("            eigenvector %d (x y z roll pitch yaw):", k);
+    for (int i = 0; i < 6; ++i) std::printf(" %+.3f", es.eigenvectors()(i, k));
+    std::printf("\n");
+  }
+}
+
+void printDiagnosis(const cal::ExperimentTrial& trial, const cal::CalibrationParams& params,
+                    const cal::CalibrationResult& r) {
+  const cal::ScanSet& t = trial.input.target;
+  cal::PointVector at_truth;
+  cal::accumulate(t, cal::toIsometry(trial.truth), &at_truth);
+  long objects = 0;
+  for (std::size_t i = 0; i < at_truth.size(); ++i) {
+    // Height above the ground under the vehicle of the point's scan (flat-ish worlds).
+    std::size_t k = std::upper_bound(t.scan_begin.begin(), t.scan_begin.end(),
+                                     static_cast<uint32_t>(i)) - t.scan_begin.begin() - 1;
+    if (at_truth[i].z() - t.vehicle_poses[k].translation().z() > 0.3) ++objects;
+  }
+  std::printf("          target: %zu scans, %zu points (%.1f per scan), %.1f %% on objects at the "
+              "truth; reference: %zu scans, %zu points\n",
+              t.numScans(), t.numPoints(), t.numPoints() / std::max<double>(1, t.numScans()),
+              100.0 * objects / std::max<std::size_t>(1, at_truth.size()),
+              trial.input.reference.numScans(), trial.input.reference.numPoints());
+  const cal::Pose6 coarse = cal::poseDifference(r.search.best, trial.truth);
+  std::printf("          coarse search (%d iterations) error: x %+.3f y %+.3f z %+.3f m, roll %+.4f "
+              "pitch %+.4f yaw %+.4f rad, cost %.5f\n",
+              r.search.iterations, coarse[0], coarse[1], coarse[2], coarse[3], coarse[4], coarse[5],
+              r.search.best_cost);
+  if (!r.plane_sweep.empty()) {
+    std::printf("          ground-line sweep (rotation rad: cost):");
+    for (const auto& c : r.plane_sweep) std::printf(" %+.2f:%.5f", c.first, c.second);
+    std::printf("\n");
+  }
+  cal::PointVector reference;
+  cal::accumulate(trial.input.reference, trial.input.reference_extrinsic, &reference);
+  reference = cal::voxelDownsample(reference, params.refinement.reference_voxel);
+  cal::SurfaceModel model;
+  model.build(reference, params.refinement);
+  const cal::ScanSet target = cal::refinementTarget(t, params.refinement);
+  printHessian("at the truth", model, target, trial.truth, params);
+  printHessian("at the solution", model, target, r.extrinsic, params);
+  std::printf("          observability at the solution: scaled eigenvalues");
+  for (int i = 0; i < 6; ++i) std::printf(" %.3g", r.observability.eigenvalues[i]);
+  std::printf("; stddev");
+  for (int i = 0; i < 6; ++i) std::printf(" %.3g", r.stddev[i]);
+  std::printf("\n");
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -134,7 +210,8 @@ int main(int argc, char** argv) {
   uint64_t seed = 1;
   double bin = -1, probe = -1, centre_x = 0, centre_y = 0;
   bool centre_given = false, corridor_given = false;
-  bool quiet = false;
+  bool quiet = false, diagnose = false;
+  double drive_speed = cal::ExperimentOptions().drive_speed;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     const auto value = [&](const char* name) -> std::string {
@@ -158,6 +235,8 @@ int main(int argc, char** argv) {
       else if (a == "--bin") bin = std::stod(value("--bin"));
       else if (a == "--repeatability") windows = std::stoi(value("--repeatability"));
       else if (a == "--quiet") quiet = true;
+      else if (a == "--diagnose") diagnose = true;
+      else if (a == "--drive-speed") drive_speed = std::stod(value("--drive-speed"));
       else if (a == "--disk") corridor_given = true;  // the thesis's disk of poses on any world
       else if (a == "--centre") {
         const std::string v = value("--centre");
@@ -193,6 +272,7 @@ int main(int argc, char** argv) {
   }
   cal::ExperimentOptions options;
   options.poses = poses;
+  options.drive_speed = drive_speed;
   // The alley (walls at y = +-3.2 from x = -60 to 160) is driven along, not turned in: poses
   // within +-5 m along x around its middle, +-0.5 m across, yaw +-0.02 rad. (With the thesis's
   // +-0.5 rad of yaw the walls would fix the extrinsic's x through the turning: see the report.)
@@ -255,6 +335,7 @@ int main(int argc, char** argv) {
       const cal::Pose6 curv = r.observability.curvature / std::max(1e-300, r.observability.curvature.maxCoeff());
       std::printf("          cost curvature along the Hessian's eigenvectors (relative): %.2g %.2g %.2g %.2g %.2g %.2g\n",
                   curv[0], curv[1], curv[2], curv[3], curv[4], curv[5]);
+      if (diagnose) printDiagnosis(trial, params, r);
       if (windows > 1) {
         const cal::Pose6 rep = cal::repeatability(trial.input, params, r.extrinsic, windows);
         std::printf("          repeatability over %d windows (std): x %.4f y %.4f z %.4f m, "

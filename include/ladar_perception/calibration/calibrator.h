@@ -13,6 +13,7 @@
 #include "ladar_perception/calibration/observability.h"
 #include "ladar_perception/calibration/pose.h"
 #include "ladar_perception/calibration/refinement.h"
+#include "ladar_perception/calibration/scan_plane.h"
 #include "ladar_perception/calibration/search.h"
 
 namespace ladar_perception {
@@ -64,6 +65,21 @@ struct CalibrationParams {
   // The coarse stage of the default method stops once its spread is below this.
   Pose6 coarse_min_spread = (Pose6() << 0.08, 0.08, 0.08, 0.015, 0.015, 0.015).finished();
   int coarse_max_iterations = 25;
+  // 2D ladar targets (fewer than sparse_scan_points per scan), default method: after the coarse
+  // search, the mount rotated about its scan plane's ground line (scan_plane.h) by
+  // -plane_sweep_range..+plane_sweep_range in plane_sweep_steps values (those inside the search
+  // region) is each refined for plane_sweep_iterations; the one with the lowest robust cost over
+  // all target points (sparseTargetCost) goes on to the full refinement. 0 steps = off.
+  int plane_sweep_steps = 13;
+  double plane_sweep_range = 0.3;    // [rad]
+  int plane_sweep_iterations = 10;
+  double ground_z = 0.0;             // the ground's height in base_link [m]
+  // 2D targets: hypotheses whose scan plane meets the ground within target_max_range at less than
+  // this incidence are impossible (grazesGround, scan_plane.h) and score infinity. 0 = off.
+  double min_ground_incidence = 0.05;  // [rad] (~3 degrees)
+  double target_max_range = 80.0;      // [m] (LMS-291, Table 4.1)
+  // 2D targets: the surface model keeps edge points (RefinementParams::keep_edges).
+  bool sparse_keep_edges = true;
 };
 
 // The thesis's particle filter settings (4.4.4, 5.2.1 tuned): 3 m bins, 100 hypotheses per step,
@@ -82,6 +98,8 @@ struct CalibrationResult {
   std::string method;
   long evaluations = 0;
   std::vector<Pose6> trace;         // the estimate after each iteration of every stage
+  // The ground-line sweep of a 2D target: (rotation [rad], cost after the short refinement).
+  std::vector<std::pair<double, double>> plane_sweep;
   SearchResult search;
   RefinementResult refinement;
   Observability observability;
@@ -112,8 +130,18 @@ class HypothesisCost {
   PointVector accumulated_;
   FeatureSet features_;
   std::vector<float> scratch_;
+  bool sparse_ = false;
   bool valid_ = false;
 };
+
+// True when the target is a 2D ladar (or as sparse): fewer than sparse_scan_points per scan.
+bool isSparseTarget(const ScanSet& target, const CalibrationParams& params);
+
+// The robust point-to-plane cost over ALL target points: the Huber loss of each correspondence,
+// and the loss at max_correspondence_end for a point with none, averaged. Unlike the mean over
+// correspondences alone it does not reward hypotheses that push points away from every surface.
+double sparseTargetCost(const Linearisation& lin, std::size_t target_points,
+                        const RefinementParams& params);
 
 // Runs the method. Progress is reported after each iteration of each stage; returning false
 // from it cancels (the result then says so). Never throws on bad data: success false + message.

@@ -43,8 +43,12 @@ struct ExperimentOptions {
   // y within +-max_lateral, yaw within +-max_yaw (driving along an alley).
   double max_lateral = -1.0;
   // A 2D ladar sees one line per scan; it is accumulated while the vehicle drives from each pose
-  // to the next (poses interpolated, straight segments), this many scans per segment. The 3D
-  // sensors scan once at each pose.
+  // to the next (poses interpolated, straight segments). With drive_speed > 0 the vehicle drives
+  // at that speed [m/s] and the ladar keeps its own rate (75 Hz for the LMS-291), so a segment of
+  // length d gives round(d / drive_speed * 75) scans (at least one), and the last pose one scan;
+  // with drive_speed <= 0, sick_scans_per_pose scans per segment. The 3D sensors scan once at
+  // each pose (the thesis's 10 poses).
+  double drive_speed = 2.0;
   int sick_scans_per_pose = 20;
   sim::NoiseProfile noise = sim::NoiseProfile::kTable41;
   Pose6 guess_offset = (Pose6() << 1.0, 1.0, 1.0, 0.2, 0.2, 0.2).finished();  // uniform +-

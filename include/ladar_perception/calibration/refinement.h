@@ -35,6 +35,16 @@ struct RefinementParams {
   int max_iterations = 30;
   double convergence = 1e-5;     // step norm (m, rad) below which it stops
   double damping = 1e-4;         // Levenberg-Marquardt lambda relative to diag(H)
+  // Keep the reference points that are not on a surface (edges, corners, poles, thin objects)
+  // as point-to-point correspondences (normal zero, three residuals) instead of dropping them.
+  // Used for 2D targets: many of a tilted 2D ladar's object returns fall on car edges and poles,
+  // and without them those returns find no correspondence while the degenerate mount that lays
+  // every return on the ground finds one for each (scan_plane.h).
+  bool keep_edges = false;
+  // When non-zero: a direction in step coordinates (dx, dy, dz, dwx, dwy, dwz) the refinement
+  // must not move along (the steps are solved in its orthogonal complement). The calibrator
+  // holds a 2D ladar's ground-line rotation fixed this way while it profiles the cost along it.
+  Pose6 frozen_direction = Pose6::Zero();
 };
 
 // Reference points with normals, ready for correspondences.
@@ -46,10 +56,11 @@ class SurfaceModel {
   std::size_t size() const { return points_.size(); }
   const KdTree& tree() const { return tree_; }
   const PointVector& points() const { return points_; }
+  // Unit normal of a surface point; zero for an edge point (point-to-point).
   const PointVector& normals() const { return normals_; }
 
  private:
-  PointVector points_, normals_;  // surface points only
+  PointVector points_, normals_;  // surface points (and edge points when keep_edges)
   KdTree tree_;
 };
 

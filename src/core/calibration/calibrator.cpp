@@ -1,6 +1,8 @@
 #include "ladar_perception/calibration/calibrator.h"
 
+#include <algorithm>
 #include <chrono>
+#include <limits>
 #include <cmath>
 #include <sstream>
 
@@ -63,10 +65,9 @@ HypothesisCost::HypothesisCost(const CalibrationInput& input, const CalibrationP
   accumulate(input.reference, input.reference_extrinsic, &reference);
   reference = voxelDownsample(reference, params.feature_voxel);
   if (reference.empty() || target_.empty()) return;
+  sparse_ = isSparseTarget(input.target, params);
   if (params_.metric == Metric::kAuto) {
-    const double per_scan = static_cast<double>(input.target.numPoints()) /
-                            std::max<std::size_t>(1, input.target.numScans());
-    params_.metric = per_scan < params.sparse_scan_points ? Metric::kClosestPointRaw
+    params_.metric = isSparseTarget(input.target, params) ? Metric::kClosestPointRaw
                                                           : Metric::kClosestPoint;
   }
   if (params_.metric == Metric::kClosestPointRaw) {
@@ -96,6 +97,10 @@ double HypothesisCost::operator()(const Pose6& target_extrinsic) {
     if (params_.spread[i] > 0 && d > params_.region * params_.spread[i]) {
       return std::numeric_limits<double>::infinity();
     }
+  }
+  if (sparse_ && grazesGround(target_extrinsic, params_.ground_z, params_.min_ground_incidence,
+                              params_.target_max_range)) {
+    return std::numeric_limits<double>::infinity();
   }
   accumulate(target_, toIsometry(target_extrinsic), &accumulated_);
   if (params_.metric == Metric::kAverageHeight) return ref_grid_.error(accumulated_);
@@ -132,7 +137,32 @@ double HypothesisCost::operator()(const Pose6& target_extrinsic) {
   return trimmedMean(&scratch_, params_.trim_fraction);
 }
 
+bool isSparseTarget(const ScanSet& target, const CalibrationParams& params) {
+  const double per_scan = static_cast<double>(target.numPoints()) /
+                          std::max<std::size_t>(1, target.numScans());
+  return per_scan < params.sparse_scan_points;
+}
+
+double sparseTargetCost(const Linearisation& lin, std::size_t target_points,
+                        const RefinementParams& params) {
+  if (target_points == 0) return std::numeric_limits<double>::infinity();
+  const double cap = params.max_correspondence_end;
+  const double miss = cap <= params.huber ? 0.5 * cap * cap : params.huber * (cap - 0.5 * params.huber);
+  const long n = std::min<long>(lin.correspondences, static_cast<long>(target_points));
+  const double sum = n > 0 ? lin.cost * static_cast<double>(n) : 0.0;
+  return (sum + miss * static_cast<double>(target_points - n)) / static_cast<double>(target_points);
+}
+
 namespace {
+
+bool insideRegion(const Pose6& p, const CalibrationParams& params) {
+  for (int i = 0; i < 6; ++i) {
+    const double d = i < 3 ? std::abs(p[i] - params.initial[i])
+                           : std::abs(wrapAngle(p[i] - params.initial[i]));
+    if (params.spread[i] > 0 && d > params.region * params.spread[i]) return false;
+  }
+  return true;
+}
 
 using Clock = std::chrono::steady_clock;
 
@@ -217,6 +247,8 @@ CalibrationResult calibrate(const CalibrationInput& input, const CalibrationPara
   }
 
   // The dense surface model serves the refinement and the observability check of every method.
+  const bool sparse = isSparseTarget(input.target, params);
+  if (sparse && params.sparse_keep_edges) params.refinement.keep_edges = true;
   PointVector reference;
   accumulate(input.reference, input.reference_extrinsic, &reference);
   reference = voxelDownsample(reference, params.refinement.reference_voxel);
@@ -224,8 +256,88 @@ CalibrationResult calibrate(const CalibrationInput& input, const CalibrationPara
   model.build(reference, params.refinement);
   const ScanSet target = refinementTarget(input.target, params.refinement);
   Linearisation lin;
+  if (!cancelled && params.method == "coarse_to_fine" && sparse && params.plane_sweep_steps > 0) {
+    // The ground-line ambiguity of a 2D ladar (scan_plane.h): a local refinement slides along
+    // the family, so the cost is profiled along it instead. Each member (the coarse estimate
+    // rotated about its scan plane's ground line) is refined briefly with that rotation held
+    // fixed; a parabola through the best member and its neighbours places the minimum; the final
+    // refinement keeps the rotation held there.
+    RefinementParams brief = params.refinement;
+    brief.max_iterations = std::max(1, params.plane_sweep_iterations);
+    brief.max_correspondence_start = std::min(brief.max_correspondence_start, 1.0);
+    const auto possible = [&](const Pose6& p) {
+      return insideRegion(p, params) &&
+             !grazesGround(p, params.ground_z, params.min_ground_incidence,
+                           params.target_max_range);
+    };
+    // Refines a member with its ground-line rotation frozen; infinity when impossible.
+    const auto member = [&](const Pose6& start_pose, Pose6* refined) {
+      if (!possible(start_pose)) return std::numeric_limits<double>::infinity();
+      RefinementParams rp = brief;
+      if (!groundLineStepDirection(start_pose, params.ground_z, &rp.frozen_direction)) {
+        rp.frozen_direction.setZero();
+      }
+      const RefinementResult r = refine(model, target, start_pose, rp, progress);
+      cancelled = cancelled || r.cancelled;
+      out.evaluations += r.iterations;
+      *refined = r.extrinsic;
+      if (!possible(r.extrinsic)) return std::numeric_limits<double>::infinity();
+      return sparseTargetCost(r.at_solution, target.numPoints(), rp);
+    };
+    // The coarse estimate's other DOFs converged first (with the rotation frozen), so that the
+    // members differ by the rotation only; then two passes: the whole range, then +-one spacing
+    // around the best member in finer steps, started from that member.
+    {
+      Pose6 refined;
+      if (std::isfinite(member(estimate, &refined))) estimate = refined;
+    }
+    int steps = std::max(1, params.plane_sweep_steps);
+    double range = params.plane_sweep_range;
+    for (int pass = 0; pass < 2 && !cancelled; ++pass) {
+      const double spacing = steps == 1 ? 0.0 : 2.0 * range / (steps - 1);
+      std::vector<double> costs(steps, std::numeric_limits<double>::infinity());
+      std::vector<Pose6> members(steps, estimate);
+      int best_k = -1;
+      for (int k = 0; k < steps && !cancelled; ++k) {
+        const double angle = steps == 1 ? 0.0 : -range + k * spacing;
+        Pose6 candidate = estimate;
+        if (angle != 0.0 && !rotateAboutGroundLine(estimate, angle, params.ground_z, &candidate)) {
+          continue;
+        }
+        costs[k] = member(candidate, &members[k]);
+        if (std::isfinite(costs[k])) out.plane_sweep.emplace_back(angle, costs[k]);
+        if (std::isfinite(costs[k]) && (best_k < 0 || costs[k] < costs[best_k])) best_k = k;
+      }
+      if (best_k < 0 || cancelled) break;
+      estimate = members[best_k];
+      if (pass == 1 && best_k > 0 && best_k + 1 < steps && std::isfinite(costs[best_k - 1]) &&
+          std::isfinite(costs[best_k + 1])) {
+        const double cm = costs[best_k - 1], c0 = costs[best_k], cp = costs[best_k + 1];
+        const double denom = cm - 2.0 * c0 + cp;
+        if (denom > 0) {
+          const double offset = std::max(-1.0, std::min(1.0, 0.5 * (cm - cp) / denom)) * spacing;
+          Pose6 moved, refined;
+          if (offset != 0.0 &&
+              rotateAboutGroundLine(members[best_k], offset, params.ground_z, &moved) &&
+              std::isfinite(member(moved, &refined))) {
+            estimate = refined;
+          }
+        }
+      }
+      range = spacing;
+      steps = 5;
+    }
+    out.trace.push_back(estimate);
+  }
   if (!cancelled && (refine_only || params.method == "coarse_to_fine")) {
-    out.refinement = refine(model, target, estimate, params.refinement, progress);
+    RefinementParams rp = params.refinement;
+    if (sparse && !out.plane_sweep.empty()) {
+      rp.max_correspondence_start = rp.max_correspondence_end;  // already on the right member
+      if (!groundLineStepDirection(estimate, params.ground_z, &rp.frozen_direction)) {
+        rp.frozen_direction.setZero();
+      }
+    }
+    out.refinement = refine(model, target, estimate, rp, progress);
     cancelled = out.refinement.cancelled;
     estimate = out.refinement.extrinsic;
     out.trace.insert(out.trace.end(), out.refinement.trace.begin(), out.refinement.trace.end());
@@ -248,12 +360,7 @@ CalibrationResult calibrate(const CalibrationInput& input, const CalibrationPara
   out.unobservable = out.observability.unobservable_names;
   out.extrinsic = estimate;
 
-  bool outside = false;
-  for (int i = 0; i < 6; ++i) {
-    const double d = i < 3 ? std::abs(estimate[i] - params.initial[i])
-                           : std::abs(wrapAngle(estimate[i] - params.initial[i]));
-    outside = outside || (params.spread[i] > 0 && d > params.region * params.spread[i]);
-  }
+  const bool outside = !insideRegion(estimate, params);
   std::ostringstream msg;
   if (cancelled) {
     msg << "cancelled";

@@ -1,5 +1,8 @@
 #include "ladar_perception/calibration/experiment.h"
 
+#include <algorithm>
+#include <cmath>
+
 #include "ladar_perception/sim/random.h"
 #include "ladar_perception/sim/scan_simulator.h"
 #include "ladar_perception/sim/trajectory.h"
@@ -111,17 +114,27 @@ bool makeTrial(const sim::World& world, const PairSetup& pair, const ExperimentO
   out->input.reference_extrinsic = toIsometry(pair.reference.extrinsic);
   PointVector points;
   uint64_t stream = sim::mix64(seed);
+  const double sick_rate = sim::SickModel::lms291(options.noise).rate_hz;
+  double segment_start = 0.0;  // [s]
   for (std::size_t k = 0; k < poses.size(); ++k) {
-    const double stamp = 0.1 * static_cast<double>(k);
+    const bool last = k + 1 >= poses.size();
+    const double length =
+        last ? 0.0 : (poses[k + 1].translation() - poses[k].translation()).head<2>().norm();
+    const double duration = options.drive_speed > 0 ? length / options.drive_speed : 0.1;
     for (int side = 0; side < 2; ++side) {
       const SensorSetup& s = side == 0 ? pair.reference : pair.target;
       ScanSet& set = side == 0 ? out->input.reference : out->input.target;
       const bool sweep = s.kind == SensorKind::kSick;
-      const int repeats = sweep ? std::max(1, options.sick_scans_per_pose) : 1;
+      int repeats = 1;
+      if (sweep) {
+        repeats = options.drive_speed > 0
+                      ? (last ? 1 : std::max(1, static_cast<int>(std::lround(duration * sick_rate))))
+                      : std::max(1, options.sick_scans_per_pose);
+      }
       for (int r = 0; r < repeats; ++r) {
         Eigen::Isometry3d vehicle = poses[k];
-        if (sweep && k + 1 < poses.size()) {  // driving from pose k towards pose k + 1
-          const double f = static_cast<double>(r) / repeats;
+        const double f = static_cast<double>(r) / repeats;
+        if (sweep && !last) {  // driving from pose k towards pose k + 1
           const Eigen::Vector3d a = poses[k].translation(), b = poses[k + 1].translation();
           const double yaw_a = std::atan2(poses[k].linear()(1, 0), poses[k].linear()(0, 0));
           const double yaw_b = std::atan2(poses[k + 1].linear()(1, 0), poses[k + 1].linear()(0, 0));
@@ -130,9 +143,10 @@ bool makeTrial(const sim::World& world, const PairSetup& pair, const ExperimentO
         }
         stream = sim::mix64(stream + 1);
         if (!simulateSensor(world, s, vehicle, options.noise, stream, &points, error)) return false;
-        set.addScan(stamp + r / 75.0, vehicle, points);
+        set.addScan(segment_start + (sweep ? r / sick_rate : 0.0), vehicle, points);
       }
     }
+    segment_start += duration;
   }
   return true;
 }

@@ -4,6 +4,7 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
+#include <Eigen/SVD>
 
 namespace ladar_perception {
 namespace calibration {
@@ -25,7 +26,13 @@ void SurfaceModel::build(const PointVector& points, const RefinementParams& para
       mean += points[idx[j]].cast<double>();
       ++n;
     }
-    if (n < 5) continue;
+    if (n < 5) {
+      if (params.keep_edges) {
+        points_.push_back(points[i]);
+        normals_.push_back(Eigen::Vector3f::Zero());
+      }
+      continue;
+    }
     mean /= n;
     Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
     for (int j = 0; j < n; ++j) {
@@ -35,7 +42,13 @@ void SurfaceModel::build(const PointVector& points, const RefinementParams& para
     Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(cov);
     const Eigen::Vector3d ev = es.eigenvalues();  // ascending
     const double sum = ev.sum();
-    if (!(sum > 0) || ev[0] / sum > params.max_curvature) continue;  // not a surface point
+    if (!(sum > 0) || ev[0] / sum > params.max_curvature) {  // not a surface point
+      if (params.keep_edges) {
+        points_.push_back(points[i]);
+        normals_.push_back(Eigen::Vector3f::Zero());
+      }
+      continue;
+    }
     points_.push_back(mean.cast<float>());  // the local plane's centroid: noise averaged
     normals_.push_back(es.eigenvectors().col(0).cast<float>());
   }
@@ -65,17 +78,31 @@ Linearisation linearise(const SurfaceModel& model, const ScanSet& target, const 
       const int j = model.tree().nearest(po, &d2, max2);
       if (j < 0) continue;
       const Eigen::Vector3d nrm = model.normals()[j].cast<double>();
-      const double r = nrm.dot((po - model.points()[j]).cast<double>());
+      const Eigen::Vector3d lever = r_bs * ps.cast<double>();
+      const Eigen::Vector3d e = (po - model.points()[j]).cast<double>();
+      const bool edge = nrm.squaredNorm() < 0.25;
+      // Plane: r = n . e (eq. of the surface); edge: |e| over the three odom axes.
+      const double r = edge ? e.norm() : nrm.dot(e);
       const double ar = std::abs(r);
       const double w = ar <= huber ? 1.0 : huber / ar;  // Huber weight (IRLS)
       loss += ar <= huber ? 0.5 * r * r : huber * (ar - 0.5 * huber);
-      const Eigen::Vector3d m = r_ob.transpose() * nrm;  // normal in base_link axes
-      const Eigen::Vector3d lever = r_bs * ps.cast<double>();
-      Eigen::Matrix<double, 6, 1> jac;
-      jac.head<3>() = m;
-      jac.tail<3>() = lever.cross(m);
-      h.noalias() += w * jac * jac.transpose();
-      g.noalias() += w * r * jac;
+      if (edge) {
+        for (int a = 0; a < 3; ++a) {
+          const Eigen::Vector3d m = r_ob.row(a).transpose();  // odom axis a in base_link axes
+          Eigen::Matrix<double, 6, 1> jac;
+          jac.head<3>() = m;
+          jac.tail<3>() = lever.cross(m);
+          h.noalias() += w * jac * jac.transpose();
+          g.noalias() += w * e[a] * jac;
+        }
+      } else {
+        const Eigen::Vector3d m = r_ob.transpose() * nrm;  // normal in base_link axes
+        Eigen::Matrix<double, 6, 1> jac;
+        jac.head<3>() = m;
+        jac.tail<3>() = lever.cross(m);
+        h.noalias() += w * jac * jac.transpose();
+        g.noalias() += w * r * jac;
+      }
       wr2 += w * r * r;
       wsum += w;
       lever2 += lever.squaredNorm();
@@ -122,7 +149,18 @@ RefinementResult refine(const SurfaceModel& model, const ScanSet& target, const 
     Matrix6 a = lin.hessian;
     const double floor = 1e-9 * std::max(1e-12, a.diagonal().maxCoeff());
     for (int i = 0; i < 6; ++i) a(i, i) += params.damping * a(i, i) + floor;
-    const Pose6 step = -a.ldlt().solve(lin.gradient);
+    Pose6 step;
+    if (params.frozen_direction.norm() > 0) {
+      // Basis of the complement of the frozen direction; solve the 5-DOF system in it.
+      const Pose6 v = params.frozen_direction.normalized();
+      const Matrix6 proj = Matrix6::Identity() - v * v.transpose();
+      Eigen::JacobiSVD<Matrix6> svd(proj, Eigen::ComputeFullU);
+      const Eigen::Matrix<double, 6, 5> b = svd.matrixU().leftCols<5>();
+      const Eigen::Matrix<double, 5, 5> ab = b.transpose() * a * b;
+      step = -b * ab.ldlt().solve(b.transpose() * lin.gradient);
+    } else {
+      step = -a.ldlt().solve(lin.gradient);
+    }
     if (!step.allFinite()) break;
     res.extrinsic = applyStep(res.extrinsic, step);
     res.iterations = it + 1;

@@ -1,0 +1,61 @@
+#include "ladar_perception/calibration/scan_plane.h"
+
+#include <cmath>
+
+namespace ladar_perception {
+namespace calibration {
+
+namespace {
+// The ground line of the scan plane: direction d and the point q closest to the sensor.
+bool groundLine(const Eigen::Isometry3d& t, double ground_z, double max_distance,
+                Eigen::Vector3d* d, Eigen::Vector3d* q) {
+  const Eigen::Vector3d s = t.translation();
+  const Eigen::Vector3d n = t.linear().col(2);  // scan plane normal
+  *d = n.cross(Eigen::Vector3d::UnitZ());
+  if (d->norm() < 1e-6) return false;  // plane parallel to the ground
+  d->normalize();
+  const Eigen::Vector3d m = n.cross(*d);  // in the plane, across the line
+  if (std::abs(m.z()) < 1e-9) return false;
+  const double reach = (ground_z - s.z()) / m.z();
+  if (!std::isfinite(reach) || std::abs(reach) > max_distance) return false;
+  *q = s + reach * m;
+  return true;
+}
+}  // namespace
+
+bool rotateAboutGroundLine(const Pose6& extrinsic, double angle, double ground_z, Pose6* out,
+                           double max_distance) {
+  const Eigen::Isometry3d t = toIsometry(extrinsic);
+  Eigen::Vector3d d, q;
+  if (!groundLine(t, ground_z, max_distance, &d, &q)) return false;
+  const Eigen::Matrix3d rot = Eigen::AngleAxisd(angle, d).toRotationMatrix();
+  Eigen::Isometry3d moved = Eigen::Isometry3d::Identity();
+  moved.linear() = rot * t.linear();
+  moved.translation() = q + rot * (t.translation() - q);
+  *out = fromIsometry(moved);
+  return out->allFinite();
+}
+
+bool groundLineStepDirection(const Pose6& extrinsic, double ground_z, Pose6* direction,
+                             double max_distance) {
+  const Eigen::Isometry3d t = toIsometry(extrinsic);
+  Eigen::Vector3d d, q;
+  if (!groundLine(t, ground_z, max_distance, &d, &q)) return false;
+  direction->head<3>() = d.cross(t.translation() - q);
+  direction->tail<3>() = d;
+  return true;
+}
+
+bool grazesGround(const Pose6& extrinsic, double ground_z, double min_incidence, double max_range) {
+  if (!(min_incidence > 0)) return false;
+  const Eigen::Isometry3d t = toIsometry(extrinsic);
+  const double nz = std::min(1.0, std::abs(t.linear()(2, 2)));  // the plane normal's z
+  const double tilt = std::acos(nz);  // angle between the scan plane and the ground
+  if (tilt >= min_incidence) return false;
+  // The scan plane meets the ground at distance height / sin(tilt) from the sensor.
+  const double height = std::abs(t.translation().z() - ground_z);
+  return height < max_range * std::sin(tilt) || height < 1e-3;
+}
+
+}  // namespace calibration
+}  // namespace ladar_perception
