@@ -305,6 +305,10 @@ int main(int argc, char** argv) {
               cal::sensorKindName(pair.reference.kind), world_name.c_str(), method.c_str(), trials,
               static_cast<unsigned long long>(seed), centre_x, centre_y);
   std::vector<std::vector<double>> errors(6);
+  // The particle filter also reports the inverse-error weighted mean over all its hypotheses
+  // (thesis 4.4.4); its errors are summarised separately.
+  const bool pf = method == "particle_filter";
+  std::vector<std::vector<double>> mean_errors(6);
   std::vector<double> seconds, cpu_seconds;
   std::set<std::string> unobservable;
   std::vector<std::vector<cal::Pose6>> traces;
@@ -320,6 +324,10 @@ int main(int argc, char** argv) {
     const cal::CalibrationResult r = cal::calibrate(trial.input, params);
     const cal::Pose6 err = cal::poseDifference(r.extrinsic, trial.truth);
     for (int d = 0; d < 6; ++d) errors[d].push_back(std::abs(err[d]));
+    const cal::Pose6 mean_err = cal::poseDifference(r.search.weighted_mean, trial.truth);
+    if (pf) {
+      for (int d = 0; d < 6; ++d) mean_errors[d].push_back(std::abs(mean_err[d]));
+    }
     seconds.push_back(r.elapsed);
     cpu_seconds.push_back(r.cpu_time);
     unobservable.insert(r.unobservable.begin(), r.unobservable.end());
@@ -335,6 +343,13 @@ int main(int argc, char** argv) {
       const cal::Pose6 curv = r.observability.curvature / std::max(1e-300, r.observability.curvature.maxCoeff());
       std::printf("          cost curvature along the Hessian's eigenvectors (relative): %.2g %.2g %.2g %.2g %.2g %.2g\n",
                   curv[0], curv[1], curv[2], curv[3], curv[4], curv[5]);
+      if (pf) {
+        std::printf("          weighted mean: error x %+.4f y %+.4f z %+.4f m, roll %+.5f pitch %+.5f "
+                    "yaw %+.5f rad; %d iterations, final spread %.4f %.4f %.4f m %.5f %.5f %.5f rad\n",
+                    mean_err[0], mean_err[1], mean_err[2], mean_err[3], mean_err[4], mean_err[5],
+                    r.search.iterations, r.search.spread[0], r.search.spread[1], r.search.spread[2],
+                    r.search.spread[3], r.search.spread[4], r.search.spread[5]);
+      }
       if (diagnose) printDiagnosis(trial, params, r);
       if (windows > 1) {
         const cal::Pose6 rep = cal::repeatability(trial.input, params, r.extrinsic, windows);
@@ -351,6 +366,14 @@ int main(int argc, char** argv) {
     summary.push_back(stats(errors[d]));
     std::printf("%-6s %12.5f %12.5f %12.5f %s\n", cal::dofName(d), summary[d].mean, summary[d].std,
                 summary[d].worst, d < 3 ? "m" : "rad");
+  }
+  if (pf) {
+    std::printf("inverse-error weighted mean (thesis 4.4.4):\n");
+    for (int d = 0; d < 6; ++d) {
+      const DofStats m = stats(mean_errors[d]);
+      std::printf("%-6s %12.5f %12.5f %12.5f %s\n", cal::dofName(d), m.mean, m.std, m.worst,
+                  d < 3 ? "m" : "rad");
+    }
   }
   const double sec_median = median(seconds), sec_max = *std::max_element(seconds.begin(), seconds.end());
   const double cpu_median = median(cpu_seconds),

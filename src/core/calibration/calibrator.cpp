@@ -344,14 +344,30 @@ CalibrationResult calibrate(const CalibrationInput& input, const CalibrationPara
     out.evaluations += out.refinement.iterations;
     lin = out.refinement.at_solution;
     out.final_cost = lin.cost;
+  }
+  // The curvature means something only at a minimum of the dense cost. A search method that is
+  // not refined (the thesis's particle filter, ...) may stop on a slope of it; the observability
+  // is then read at the nearest minimum (a copy refined from the solution, the reported extrinsic
+  // stays the method's), and a solution far from that minimum is reported as not converged
+  // instead of blaming the scene.
+  Pose6 at = estimate;
+  Pose6 to_minimum = Pose6::Zero();
+  if (!cancelled && !(refine_only || params.method == "coarse_to_fine")) {
+    RefinementParams rp = params.refinement;
+    rp.max_correspondence_start = rp.max_correspondence_end;
+    at = refine(model, target, estimate, rp).extrinsic;
+    to_minimum = poseDifference(at, estimate);
+    lin = linearise(model, target, at, params.refinement.max_correspondence_end,
+                    params.refinement.huber);
+  } else if (!cancelled) {
+    // lin is the refinement's linearisation at the solution.
   } else {
     lin = linearise(model, target, estimate, params.refinement.max_correspondence_end,
                     params.refinement.huber);
   }
   const double max_corr = params.refinement.max_correspondence_end;
   const CostAlong cost_along = [&](const Pose6& step) {
-    return linearise(model, target, applyStep(estimate, step), max_corr, params.refinement.huber)
-        .cost;
+    return linearise(model, target, applyStep(at, step), max_corr, params.refinement.huber).cost;
   };
   out.observability = analyseObservability(lin.hessian, lin.residual_variance,
                                            lin.correspondences, lin.lever_arm,
@@ -367,6 +383,11 @@ CalibrationResult calibrate(const CalibrationInput& input, const CalibrationPara
   } else if (outside) {
     msg << "the solution left the search region (initial guess +- " << params.region
         << " x spread): " << estimate.transpose();
+  } else if (std::max(to_minimum.head<3>().cwiseAbs().maxCoeff(),
+                      lin.lever_arm * to_minimum.tail<3>().cwiseAbs().maxCoeff()) >
+             params.observability.max_stddev) {
+    msg << params.method << " did not converge: the nearest minimum of the dense point-to-plane "
+        << "cost is " << to_minimum.transpose() << " (x y z m, roll pitch yaw rad) away";
   } else if (lin.correspondences < 100) {
     msg << "too few correspondences between the clouds at the solution (" << lin.correspondences
         << "): do the sensors see the same surfaces?";
