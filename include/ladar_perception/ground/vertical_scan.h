@@ -43,7 +43,7 @@ struct VerticalScanParams {
   // line bends where the terrain's slope changes and steps up a curb onto the sidewalk.
   bool bend_ground_line = true;
   float segment_length = 1.0f;            // knot spacing of the piecewise ground line [m]
-  float track_max_step = 0.2f;            // highest return above the extrapolated ground [m]
+  float track_max_step = 0.12f;           // highest return above the extrapolated ground [m]
   float track_max_drop = 0.03f;           // deepest return below it [m]
   float track_tolerance_per_m = 0.05f;    // both grow by this per metre of gap [m/m]
   float track_max_local_slope = 1.0f;     // steepest rise from the last ground return
@@ -51,7 +51,7 @@ struct VerticalScanParams {
   float track_anchor_distance = 3.0f;     // the extrapolation slope spans at least this [m]
   float track_max_bend = 0.2f;            // extrapolation slope within +- this of the column's
                                           // straight estimate (eqs 3.4-3.9)
-  float track_recover_distance = 1.5f;    // consistent returns below the line over this many
+  float track_recover_distance = 0.8f;    // consistent returns below the line over this many
                                           // metres restart it there (ground behind an obstacle)
   bool couple_columns = true;             // neighbouring columns share ground evidence
   int coupling_radius = 2;                // columns on each side that are coupled
@@ -65,8 +65,8 @@ struct VerticalScanParams {
   // representatives of the laser rows just below and above it in its column (the smaller of
   // the two), combined with GndError as in eq 3.15. P = max(P_3.15, P_vertical).
   bool vertical_surfaces = true;
-  float vertical_gnd_error_max = 0.06f;   // GndError at which P_vertical's first factor is 1 [m]
-  float vertical_slope_max = 0.5f;        // local slope at which its second factor is 1
+  float vertical_gnd_error_max = 0.04f;   // GndError at which P_vertical's first factor is 1 [m]
+  float vertical_slope_max = 0.3f;        // local slope at which its second factor is 1
 };
 
 // Settings by name: "thesis" (the thesis's method and settings) and "default" (beyond it).
