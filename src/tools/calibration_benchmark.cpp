@@ -33,9 +33,11 @@ void usage() {
          "         [--method NAME] [--trials N] [--seed S] [--world NAME] [--json OUT]\n"
          "         [--plot OUT.png] [--noise table4.1|datasheet|none] [--poses N]\n"
          "         [--bin M] [--repeatability W] [--centre X,Y] [--disk] [--probe M] [--quiet]\n"
-         "         [--drive-speed M_PER_S] [--diagnose]\n"
+         "         [--drive-speed M_PER_S] [--sparse-noise-floor M] [--diagnose]\n"
          "--drive-speed: the vehicle's speed between poses; a 2D ladar scans at its own rate\n"
          "  along the way (default 2 m/s; 0 = 20 scans per segment, the old set-up)\n"
+         "--sparse-noise-floor: 2D targets' residual weighting by the reference's local noise\n"
+         "  (default 0.02 m, 0 = off)\n"
          "--diagnose: per trial, the target's scans and points, the share of its points on\n"
          "  objects (> 0.3 m above the ground at the truth), the 2D ground-line sweep's costs and\n"
          "  the point-to-plane Hessian's eigenvalues and weakest eigenvectors at the truth and at\n"
@@ -212,6 +214,7 @@ int main(int argc, char** argv) {
   bool centre_given = false, corridor_given = false;
   bool quiet = false, diagnose = false;
   double drive_speed = cal::ExperimentOptions().drive_speed;
+  double sparse_noise_floor = cal::CalibrationParams().sparse_noise_floor;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     const auto value = [&](const char* name) -> std::string {
@@ -237,6 +240,7 @@ int main(int argc, char** argv) {
       else if (a == "--quiet") quiet = true;
       else if (a == "--diagnose") diagnose = true;
       else if (a == "--drive-speed") drive_speed = std::stod(value("--drive-speed"));
+      else if (a == "--sparse-noise-floor") sparse_noise_floor = std::stod(value("--sparse-noise-floor"));
       else if (a == "--disk") corridor_given = true;  // the thesis's disk of poses on any world
       else if (a == "--centre") {
         const std::string v = value("--centre");
@@ -298,6 +302,7 @@ int main(int argc, char** argv) {
   params.spread = options.guess_offset;
   if (bin > 0) params.bin_size = bin;
   if (probe > 0) params.observability.probe = probe;
+  params.sparse_noise_floor = sparse_noise_floor;
 
   std::printf("pair %s (target %s against reference %s), world %s, method %s, %d trials, seed %llu, "
               "poses around (%.1f, %.1f)\n",

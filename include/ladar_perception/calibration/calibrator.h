@@ -80,6 +80,8 @@ struct CalibrationParams {
   double target_max_range = 80.0;      // [m] (LMS-291, Table 4.1)
   // 2D targets: the surface model keeps edge points (RefinementParams::keep_edges).
   bool sparse_keep_edges = true;
+  // 2D targets: residuals weighted by the reference's local noise (RefinementParams::noise_floor).
+  double sparse_noise_floor = 0.02;  // [m], 0 = off (0.05: z 0.15-0.21 m low, 0.01: unstable)
 };
 
 // The thesis's particle filter settings (4.4.4, 5.2.1 tuned): 3 m bins, 100 hypotheses per step,

@@ -45,6 +45,13 @@ struct RefinementParams {
   // must not move along (the steps are solved in its orthogonal complement). The calibrator
   // holds a 2D ladar's ground-line rotation fixed this way while it profiles the cost along it.
   Pose6 frozen_direction = Pose6::Zero();
+  // When > 0 [m]: each residual is weighted by noise_floor / sqrt(noise_floor^2 + s_j^2), s_j the
+  // RMS spread of its reference neighbourhood about the local plane (or about its centroid for
+  // an edge point), so that a return on a noisily modelled surface (a car side seen by a 0.2 m
+  // noise Velodyne) counts for less than one on a crisp surface (the ground seen at grazing
+  // angles). Used for 2D targets: without it their cost prefers mounts that move object returns
+  // onto the crisper ground.
+  double noise_floor = 0.0;
 };
 
 // Reference points with normals, ready for correspondences.
@@ -58,9 +65,12 @@ class SurfaceModel {
   const PointVector& points() const { return points_; }
   // Unit normal of a surface point; zero for an edge point (point-to-point).
   const PointVector& normals() const { return normals_; }
+  // RMS spread of each point's neighbourhood about its plane (centroid for edge points) [m].
+  const std::vector<float>& spreads() const { return spreads_; }
 
  private:
   PointVector points_, normals_;  // surface points (and edge points when keep_edges)
+  std::vector<float> spreads_;
   KdTree tree_;
 };
 
@@ -75,7 +85,7 @@ struct Linearisation {
 };
 
 Linearisation linearise(const SurfaceModel& model, const ScanSet& target, const Pose6& extrinsic,
-                        double max_correspondence, double huber);
+                        double max_correspondence, double huber, double noise_floor = 0.0);
 
 struct RefinementResult {
   Pose6 extrinsic = Pose6::Zero();

@@ -249,6 +249,7 @@ CalibrationResult calibrate(const CalibrationInput& input, const CalibrationPara
   // The dense surface model serves the refinement and the observability check of every method.
   const bool sparse = isSparseTarget(input.target, params);
   if (sparse && params.sparse_keep_edges) params.refinement.keep_edges = true;
+  if (sparse && params.sparse_noise_floor > 0) params.refinement.noise_floor = params.sparse_noise_floor;
   PointVector reference;
   accumulate(input.reference, input.reference_extrinsic, &reference);
   reference = voxelDownsample(reference, params.refinement.reference_voxel);
@@ -358,16 +359,18 @@ CalibrationResult calibrate(const CalibrationInput& input, const CalibrationPara
     at = refine(model, target, estimate, rp).extrinsic;
     to_minimum = poseDifference(at, estimate);
     lin = linearise(model, target, at, params.refinement.max_correspondence_end,
-                    params.refinement.huber);
+                    params.refinement.huber, params.refinement.noise_floor);
   } else if (!cancelled) {
     // lin is the refinement's linearisation at the solution.
   } else {
     lin = linearise(model, target, estimate, params.refinement.max_correspondence_end,
-                    params.refinement.huber);
+                    params.refinement.huber, params.refinement.noise_floor);
   }
   const double max_corr = params.refinement.max_correspondence_end;
   const CostAlong cost_along = [&](const Pose6& step) {
-    return linearise(model, target, applyStep(at, step), max_corr, params.refinement.huber).cost;
+    return linearise(model, target, applyStep(at, step), max_corr, params.refinement.huber,
+                     params.refinement.noise_floor)
+        .cost;
   };
   out.observability = analyseObservability(lin.hessian, lin.residual_variance,
                                            lin.correspondences, lin.lever_arm,

@@ -12,6 +12,7 @@ namespace calibration {
 void SurfaceModel::build(const PointVector& points, const RefinementParams& params) {
   points_.clear();
   normals_.clear();
+  spreads_.clear();
   KdTree all(points);
   std::vector<int> idx;
   std::vector<float> d2;
@@ -30,6 +31,7 @@ void SurfaceModel::build(const PointVector& points, const RefinementParams& para
       if (params.keep_edges) {
         points_.push_back(points[i]);
         normals_.push_back(Eigen::Vector3f::Zero());
+        spreads_.push_back(static_cast<float>(params.normal_radius));  // isolated: unknown
       }
       continue;
     }
@@ -46,17 +48,19 @@ void SurfaceModel::build(const PointVector& points, const RefinementParams& para
       if (params.keep_edges) {
         points_.push_back(points[i]);
         normals_.push_back(Eigen::Vector3f::Zero());
+        spreads_.push_back(static_cast<float>(std::sqrt(std::max(0.0, sum) / n)));
       }
       continue;
     }
     points_.push_back(mean.cast<float>());  // the local plane's centroid: noise averaged
     normals_.push_back(es.eigenvectors().col(0).cast<float>());
+    spreads_.push_back(static_cast<float>(std::sqrt(std::max(0.0, ev[0]) / n)));
   }
   tree_.build(points_);
 }
 
 Linearisation linearise(const SurfaceModel& model, const ScanSet& target, const Pose6& extrinsic,
-                        double max_correspondence, double huber) {
+                        double max_correspondence, double huber, double noise_floor) {
   Linearisation lin;
   if (model.empty()) return lin;
   const Eigen::Isometry3d t_bs = toIsometry(extrinsic);
@@ -79,16 +83,24 @@ Linearisation linearise(const SurfaceModel& model, const ScanSet& target, const 
       if (j < 0) continue;
       const Eigen::Vector3d nrm = model.normals()[j].cast<double>();
       const Eigen::Vector3d lever = r_bs * ps.cast<double>();
-      const Eigen::Vector3d e = (po - model.points()[j]).cast<double>();
+      Eigen::Vector3d e = (po - model.points()[j]).cast<double>();
       const bool edge = nrm.squaredNorm() < 0.25;
+      if (noise_floor > 0) {  // residual scaled by the reference's local noise
+        const double sj = model.spreads()[j];
+        e *= noise_floor / std::sqrt(noise_floor * noise_floor + sj * sj);
+      }
       // Plane: r = n . e (eq. of the surface); edge: |e| over the three odom axes.
       const double r = edge ? e.norm() : nrm.dot(e);
       const double ar = std::abs(r);
       const double w = ar <= huber ? 1.0 : huber / ar;  // Huber weight (IRLS)
       loss += ar <= huber ? 0.5 * r * r : huber * (ar - 0.5 * huber);
       if (edge) {
+        const double scale = noise_floor > 0
+                                 ? noise_floor / std::sqrt(noise_floor * noise_floor +
+                                                           model.spreads()[j] * model.spreads()[j])
+                                 : 1.0;
         for (int a = 0; a < 3; ++a) {
-          const Eigen::Vector3d m = r_ob.row(a).transpose();  // odom axis a in base_link axes
+          const Eigen::Vector3d m = scale * r_ob.row(a).transpose();  // odom axis a, base_link
           Eigen::Matrix<double, 6, 1> jac;
           jac.head<3>() = m;
           jac.tail<3>() = lever.cross(m);
@@ -96,7 +108,11 @@ Linearisation linearise(const SurfaceModel& model, const ScanSet& target, const 
           g.noalias() += w * e[a] * jac;
         }
       } else {
-        const Eigen::Vector3d m = r_ob.transpose() * nrm;  // normal in base_link axes
+        const double scale = noise_floor > 0
+                                 ? noise_floor / std::sqrt(noise_floor * noise_floor +
+                                                           model.spreads()[j] * model.spreads()[j])
+                                 : 1.0;
+        const Eigen::Vector3d m = scale * (r_ob.transpose() * nrm);  // normal in base_link axes
         Eigen::Matrix<double, 6, 1> jac;
         jac.head<3>() = m;
         jac.tail<3>() = lever.cross(m);
@@ -144,7 +160,7 @@ RefinementResult refine(const SurfaceModel& model, const ScanSet& target, const 
     const double max_corr = params.max_correspondence_start +
                             f * (params.max_correspondence_end - params.max_correspondence_start);
     const Linearisation lin =
-        linearise(model, target, res.extrinsic, max_corr, params.huber);
+        linearise(model, target, res.extrinsic, max_corr, params.huber, params.noise_floor);
     if (lin.correspondences < 6) break;
     Matrix6 a = lin.hessian;
     const double floor = 1e-9 * std::max(1e-12, a.diagonal().maxCoeff());
@@ -183,8 +199,8 @@ RefinementResult refine(const SurfaceModel& model, const ScanSet& target, const 
       break;
     }
   }
-  res.at_solution =
-      linearise(model, target, res.extrinsic, params.max_correspondence_end, params.huber);
+  res.at_solution = linearise(model, target, res.extrinsic, params.max_correspondence_end,
+                              params.huber, params.noise_floor);
   return res;
 }
 
