@@ -71,8 +71,7 @@ CalibrationRos::CalibrationRos(ros::NodeHandle nh, ros::NodeHandle private_nh)
     : nh_(nh),
       private_nh_(private_nh),
       service_nh_(private_nh),
-      health_("Calibration"),
-      diagnostics_(nh, private_nh) {
+      health_("Calibration") {
   odom_frame_ = private_nh_.param<std::string>("odom_frame", "odom");
   base_frame_ = private_nh_.param<std::string>("base_frame", "base_link");
   output_file_ = private_nh_.param<std::string>("output_file", "");
@@ -106,15 +105,9 @@ CalibrationRos::CalibrationRos(ros::NodeHandle nh, ros::NodeHandle private_nh)
   service_spinner_.reset(new ros::AsyncSpinner(2, &service_queue_));
   service_spinner_->start();
 
-  diagnostics_.setHardwareID("none");
-  diagnostics_.add("calibration", this, &CalibrationRos::diagnose);
-  diagnostics_timer_ = private_nh_.createTimer(ros::Duration(1.0), [this](const ros::TimerEvent&) {
-    try {
-      diagnostics_.update();
-    } catch (const std::exception& e) {
-      ROS_ERROR_THROTTLE(10.0, "Calibration: diagnostics update failed: %s", e.what());
-    }
-  });
+  diagnostics_.reset(new AdapterDiagnostics(
+      nh_, private_nh_, "Calibration", "calibration", 0.0, 0.0,  // no rate check: any pair of rates
+      [this](diagnostic_updater::DiagnosticStatusWrapper& s) { diagnose(s); }));
 
   drain_timer_ = nh_.createTimer(ros::Duration(0.05), &CalibrationRos::drainPending, this);
   const int queue = private_nh_.param("queue_size", 20);
@@ -142,7 +135,7 @@ CalibrationRos::~CalibrationRos() {
   shutting_down_ = true;  // a running calibration stops at its next progress report
   for (Sensor& s : sensors_) s.subscriber.shutdown();
   drain_timer_.stop();
-  diagnostics_timer_.stop();
+  diagnostics_.reset();
   if (service_spinner_) service_spinner_->stop();
   calibrate_srv_.shutdown();
   reset_srv_.shutdown();

@@ -5,7 +5,6 @@
 #include <exception>
 #include <sstream>
 
-#include <tf2_eigen/tf2_eigen.h>
 #include <visualization_msgs/Marker.h>
 
 #include "ladar_perception/cloud/laser_scan.h"
@@ -67,15 +66,13 @@ void loadHoughMethodSettings(const std::string& method, HoughGroundConfig* c) {
 }
 
 HoughGroundRos::HoughGroundRos(ros::NodeHandle nh, ros::NodeHandle private_nh)
-    : nh_(nh), private_nh_(private_nh), health_("HoughGround"), diagnostics_(nh, private_nh) {
+    : nh_(nh), private_nh_(private_nh), health_("HoughGround") {
   ground_frame_ = private_nh_.param<std::string>("ground_frame", "base_footprint");
   use_tf_ = private_nh_.param("use_tf", true);
   mount_roll_ = private_nh_.param("mount_roll", mount_roll_);
   mount_pitch_ = private_nh_.param("mount_pitch", mount_pitch_);
   const int queue_size = private_nh_.param("queue_size", 15);
   const double tf_tolerance = private_nh_.param("tf_tolerance", 0.0);
-  expected_rate_min_ = private_nh_.param("expected_rate_min", 50.0);
-  expected_rate_max_ = private_nh_.param("expected_rate_max", 100.0);
 
   ground_pub_ = nh_.advertise<sensor_msgs::PointCloud2>("ground", 5);
   obstacles_pub_ = nh_.advertise<sensor_msgs::PointCloud2>("obstacles", 5);
@@ -83,95 +80,35 @@ HoughGroundRos::HoughGroundRos(ros::NodeHandle nh, ros::NodeHandle private_nh)
   line_pub_ = nh_.advertise<visualization_msgs::Marker>("ground_line", 5);
   fit_pub_ = nh_.advertise<HoughGroundFit>("ground_fit", 5);
 
-  diagnostics_.setHardwareID("none");
-  rate_status_.reset(new diagnostic_updater::FrequencyStatus(
-      diagnostic_updater::FrequencyStatusParam(&expected_rate_min_, &expected_rate_max_, 0.1, 10)));
-  diagnostics_.add(*rate_status_);
-  diagnostics_.add("hough ground", this, &HoughGroundRos::diagnose);
-  diagnostics_timer_ = private_nh_.createTimer(ros::Duration(1.0), [this](const ros::TimerEvent&) {
-    try {
-      diagnostics_.update();
-    } catch (const std::exception& e) {
-      ROS_ERROR_THROTTLE(10.0, "HoughGround: diagnostics update failed: %s", e.what());
-    }
+  diagnostics_.reset(new AdapterDiagnostics(
+      nh_, private_nh_, "HoughGround", "hough ground", private_nh_.param("expected_rate_min", 50.0),
+      private_nh_.param("expected_rate_max", 100.0),
+      [this](diagnostic_updater::DiagnosticStatusWrapper& s) { diagnose(s); }));
+
+  method_reconfigure_.reset(new MethodReconfigure<HoughGroundConfig>(private_nh_, loadHoughMethodSettings));
+  reconfigure_server_.reset(new dynamic_reconfigure::Server<HoughGroundConfig>(private_nh_));
+  reconfigure_server_->setCallback([this](HoughGroundConfig& config, uint32_t) {
+    std::lock_guard<std::mutex> lock(config_mutex_);
+    method_reconfigure_->apply(config);
+    config_ = config;
+    config_changed_ = true;
   });
 
-  // The parameters given explicitly at start-up, noted before the dynamic_reconfigure server
-  // writes every parameter to the parameter server.
-  for (const auto& param : HoughGroundConfig::__getParamDescriptions__()) {
-    if (param->name != "method" && private_nh_.hasParam(param->name)) explicit_params_.push_back(param->name);
-  }
-  reconfigure_server_.reset(new dynamic_reconfigure::Server<HoughGroundConfig>(private_nh_));
-  reconfigure_server_->setCallback(
-      [this](HoughGroundConfig& config, uint32_t level) { reconfigure(config, level); });
-
   // Subscribe last.
-  if (use_tf_) {
-    tf_listener_.reset(new tf2_ros::TransformListener(tf_buffer_, nh_));
-    scan_sub_.subscribe(nh_, "scan", queue_size);
-    tf_filter_.reset(new tf2_ros::MessageFilter<sensor_msgs::LaserScan>(
-        scan_sub_, tf_buffer_, ground_frame_, queue_size, nh_));
-    tf_filter_->setTolerance(ros::Duration(tf_tolerance));
-    tf_filter_->registerCallback(&HoughGroundRos::scanCallback, this);
-    tf_filter_->registerFailureCallback(
-        [this](const sensor_msgs::LaserScanConstPtr& msg,
-               tf2_ros::filter_failure_reasons::FilterFailureReason reason) { tfFailure(msg, reason); });
-  } else {
-    direct_sub_ = nh_.subscribe("scan", queue_size, &HoughGroundRos::scanCallback, this);
-  }
+  input_.reset(new SensorInput<sensor_msgs::LaserScan>(
+      nh_, "scan", use_tf_, ground_frame_, queue_size, tf_tolerance, &health_,
+      [this](const sensor_msgs::LaserScanConstPtr& m) { process(m); }));
   ROS_INFO("HoughGround: listening on %s, ground frame %s%s", nh_.resolveName("scan").c_str(),
            ground_frame_.c_str(), use_tf_ ? "" : " (tf off: fixed mount)");
 }
 
 HoughGroundRos::~HoughGroundRos() {
-  diagnostics_timer_.stop();
-  if (tf_filter_) tf_filter_->clear();
+  input_.reset();  // no callback after this
 }
 
 sensor_msgs::PointCloud2ConstPtr HoughGroundRos::lastClassified() const {
   std::lock_guard<std::mutex> lock(last_mutex_);
   return last_classified_.lock();
-}
-
-void HoughGroundRos::reconfigure(HoughGroundConfig& config, uint32_t level) {
-  std::lock_guard<std::mutex> lock(config_mutex_);
-  const bool initial = last_method_.empty();
-  if (!initial && config.method != last_method_) {
-    // A new method: load its settings into every threshold (the user tunes from there).
-    loadHoughMethodSettings(config.method, &config);
-  } else if (initial && config.method != "default") {
-    // Start-up with a non-default method: its settings, except thresholds given explicitly.
-    loadHoughMethodSettings(config.method, &config);
-    for (const auto& param : HoughGroundConfig::__getParamDescriptions__()) {
-      if (std::find(explicit_params_.begin(), explicit_params_.end(), param->name) !=
-          explicit_params_.end()) {
-        param->fromServer(private_nh_, config);
-      }
-    }
-  }
-  last_method_ = config.method;
-  config_ = config;
-  config_changed_ = true;
-}
-
-void HoughGroundRos::tfFailure(const sensor_msgs::LaserScanConstPtr& msg,
-                  tf2_ros::filter_failure_reasons::FilterFailureReason reason) {
-  try {
-    health_.tfFilterDropped(ground_frame_, msg->header, reason);
-  } catch (const std::exception& e) {
-    ROS_ERROR_THROTTLE(5.0, "HoughGround: tf failure handler: %s", e.what());
-  }
-}
-
-void HoughGroundRos::scanCallback(const sensor_msgs::LaserScanConstPtr& msg) {
-  // No exception may leave a callback: it would take down every nodelet of the manager.
-  try {
-    process(msg);
-  } catch (const std::exception& e) {
-    health_.error("internal error", e.what());
-  } catch (...) {
-    health_.error("internal error", "unknown exception");
-  }
 }
 
 bool HoughGroundRos::sensorPose(const sensor_msgs::LaserScan& msg, SensorPose* pose) {
@@ -186,12 +123,12 @@ bool HoughGroundRos::sensorPose(const sensor_msgs::LaserScan& msg, SensorPose* p
     pose->sensor_to_ground = t;
     return true;
   }
-  return sensorPoseFromTf(tf_buffer_, ground_frame_, msg.header, &health_, pose);
+  return sensorPoseFromTf(input_->buffer(), ground_frame_, msg.header, &health_, pose);
 }
 
 void HoughGroundRos::process(const sensor_msgs::LaserScanConstPtr& msg) {
   last_input_.store(msg.get());
-  rate_status_->tick();
+  diagnostics_->tick();
   std::lock_guard<std::mutex> process_lock(process_mutex_);
   {
     std::lock_guard<std::mutex> lock(config_mutex_);

@@ -2,9 +2,6 @@
 
 #include <algorithm>
 #include <exception>
-#include <sstream>
-
-#include <tf2_eigen/tf2_eigen.h>
 
 #include "ladar_perception/ros/cloud_conversion.h"
 
@@ -82,90 +79,46 @@ void loadMethodSettings(const std::string& method, VerticalScanGroundConfig* c) 
 }
 
 VerticalScanGroundRos::VerticalScanGroundRos(ros::NodeHandle nh, ros::NodeHandle private_nh)
-    : nh_(nh), private_nh_(private_nh), health_("VerticalScanGround"), diagnostics_(nh, private_nh) {
+    : nh_(nh), private_nh_(private_nh), health_("VerticalScanGround") {
   ground_frame_ = private_nh_.param<std::string>("ground_frame", "base_footprint");
   use_tf_ = private_nh_.param("use_tf", true);
   const int queue_size = private_nh_.param("queue_size", 3);
   const double tf_tolerance = private_nh_.param("tf_tolerance", 0.0);
-  expected_rate_min_ = private_nh_.param("expected_rate_min", 5.0);
-  expected_rate_max_ = private_nh_.param("expected_rate_max", 20.0);
 
   ground_pub_ = nh_.advertise<sensor_msgs::PointCloud2>("ground", 2);
   obstacles_pub_ = nh_.advertise<sensor_msgs::PointCloud2>("obstacles", 2);
   classified_pub_ = nh_.advertise<sensor_msgs::PointCloud2>("classified", 2);
 
-  diagnostics_.setHardwareID("none");
-  rate_status_.reset(new diagnostic_updater::FrequencyStatus(
-      diagnostic_updater::FrequencyStatusParam(&expected_rate_min_, &expected_rate_max_, 0.1, 10)));
-  diagnostics_.add(*rate_status_);
-  diagnostics_.add("vertical scan ground", this, &VerticalScanGroundRos::diagnose);
-  diagnostics_timer_ = private_nh_.createTimer(ros::Duration(1.0), [this](const ros::TimerEvent&) {
-    try {
-      diagnostics_.update();
-    } catch (const std::exception& e) {
-      ROS_ERROR_THROTTLE(10.0, "VerticalScanGround: diagnostics update failed: %s", e.what());
-    }
+  diagnostics_.reset(new AdapterDiagnostics(
+      nh_, private_nh_, "VerticalScanGround", "vertical scan ground",
+      private_nh_.param("expected_rate_min", 5.0), private_nh_.param("expected_rate_max", 20.0),
+      [this](diagnostic_updater::DiagnosticStatusWrapper& s) { diagnose(s); }));
+
+  method_reconfigure_.reset(new MethodReconfigure<VerticalScanGroundConfig>(private_nh_, loadMethodSettings));
+  reconfigure_server_.reset(new dynamic_reconfigure::Server<VerticalScanGroundConfig>(private_nh_));
+  reconfigure_server_->setCallback([this](VerticalScanGroundConfig& config, uint32_t) {
+    std::lock_guard<std::mutex> lock(config_mutex_);
+    method_reconfigure_->apply(config);
+    config_ = config;
+    config_changed_ = true;
   });
 
-  // The thresholds given explicitly at start-up, noted before the dynamic_reconfigure server
-  // writes every parameter to the server.
-  for (const auto& param : VerticalScanGroundConfig::__getParamDescriptions__()) {
-    if (param->name != "method" && private_nh_.hasParam(param->name)) {
-      explicit_params_.push_back(param->name);
-    }
-  }
-  reconfigure_server_.reset(new dynamic_reconfigure::Server<VerticalScanGroundConfig>(private_nh_));
-  reconfigure_server_->setCallback(
-      [this](VerticalScanGroundConfig& config, uint32_t level) { reconfigure(config, level); });
-
   // Subscribe last.
-  if (use_tf_) {
-    tf_listener_.reset(new tf2_ros::TransformListener(tf_buffer_, nh_));
-    cloud_sub_.subscribe(nh_, "points", queue_size);
-    tf_filter_.reset(new tf2_ros::MessageFilter<sensor_msgs::PointCloud2>(
-        cloud_sub_, tf_buffer_, ground_frame_, queue_size, nh_));
-    tf_filter_->setTolerance(ros::Duration(tf_tolerance));
-    tf_filter_->registerCallback(&VerticalScanGroundRos::cloudCallback, this);
-    tf_filter_->registerFailureCallback(
-        [this](const sensor_msgs::PointCloud2ConstPtr& msg,
-               tf2_ros::filter_failure_reasons::FilterFailureReason reason) { tfFailure(msg, reason); });
-  } else {
-    direct_sub_ = nh_.subscribe("points", queue_size, &VerticalScanGroundRos::cloudCallback, this);
-  }
+  input_.reset(new SensorInput<sensor_msgs::PointCloud2>(
+      nh_, "points", use_tf_, ground_frame_, queue_size, tf_tolerance, &health_,
+      [this](const sensor_msgs::PointCloud2ConstPtr& m) { process(m); }));
   ROS_INFO("VerticalScanGround: listening on %s, ground frame %s%s",
            nh_.resolveName("points").c_str(), ground_frame_.c_str(),
            use_tf_ ? "" : " (tf off: fixed sensor_height)");
 }
 
 VerticalScanGroundRos::~VerticalScanGroundRos() {
-  diagnostics_timer_.stop();
-  if (tf_filter_) tf_filter_->clear();
+  input_.reset();  // no callback after this
 }
 
 sensor_msgs::PointCloud2ConstPtr VerticalScanGroundRos::lastClassified() const {
   std::lock_guard<std::mutex> lock(last_mutex_);
   return last_classified_.lock();
-}
-
-void VerticalScanGroundRos::reconfigure(VerticalScanGroundConfig& config, uint32_t level) {
-  std::lock_guard<std::mutex> lock(config_mutex_);
-  const bool initial = last_method_.empty();
-  if (!initial && config.method != last_method_) {
-    // A new method: load its settings into every threshold (the user tunes from there).
-    loadMethodSettings(config.method, &config);
-  } else if (initial) {
-    // Start-up: the method's settings, except thresholds given explicitly as parameters.
-    loadMethodSettings(config.method, &config);
-    for (const auto& param : VerticalScanGroundConfig::__getParamDescriptions__()) {
-      if (std::find(explicit_params_.begin(), explicit_params_.end(), param->name) !=
-          explicit_params_.end()) {
-        param->fromServer(private_nh_, config);
-      }
-    }
-  }
-  last_method_ = config.method;
-  config_ = config;
-  config_changed_ = true;
 }
 
 std::unique_ptr<GroundModel> VerticalScanGroundRos::makeModel(const VerticalScanGroundConfig& config) {
@@ -182,37 +135,17 @@ std::unique_ptr<GroundModel> VerticalScanGroundRos::makeModel(const VerticalScan
   return model;
 }
 
-void VerticalScanGroundRos::tfFailure(const sensor_msgs::PointCloud2ConstPtr& msg,
-                  tf2_ros::filter_failure_reasons::FilterFailureReason reason) {
-  try {
-    health_.tfFilterDropped(ground_frame_, msg->header, reason);
-  } catch (const std::exception& e) {
-    ROS_ERROR_THROTTLE(5.0, "VerticalScanGround: tf failure handler: %s", e.what());
-  }
-}
-
-void VerticalScanGroundRos::cloudCallback(const sensor_msgs::PointCloud2ConstPtr& msg) {
-  // No exception may leave a callback: it would take down every nodelet of the manager.
-  try {
-    process(msg);
-  } catch (const std::exception& e) {
-    health_.error("internal error", e.what());
-  } catch (...) {
-    health_.error("internal error", "unknown exception");
-  }
-}
-
 bool VerticalScanGroundRos::sensorPose(const sensor_msgs::PointCloud2& msg, SensorPose* pose) {
   if (!use_tf_) {
     *pose = SensorPose::fromHeight(sensor_height_);
     return true;
   }
-  return sensorPoseFromTf(tf_buffer_, ground_frame_, msg.header, &health_, pose);
+  return sensorPoseFromTf(input_->buffer(), ground_frame_, msg.header, &health_, pose);
 }
 
 void VerticalScanGroundRos::process(const sensor_msgs::PointCloud2ConstPtr& msg) {
   last_input_.store(msg.get());
-  rate_status_->tick();
+  diagnostics_->tick();
   std::lock_guard<std::mutex> process_lock(process_mutex_);
   {
     std::lock_guard<std::mutex> lock(config_mutex_);

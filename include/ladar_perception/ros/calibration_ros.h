@@ -20,7 +20,6 @@
 #include <string>
 #include <thread>
 
-#include <diagnostic_updater/diagnostic_updater.h>
 #include <ros/callback_queue.h>
 #include <ros/ros.h>
 #include <sensor_msgs/LaserScan.h>
@@ -31,6 +30,7 @@
 
 #include "ladar_perception/Calibrate.h"
 #include "ladar_perception/calibration/calibrator.h"
+#include "ladar_perception/ros/adapter_support.h"
 #include "ladar_perception/ros/input_health.h"
 
 namespace ladar_perception {
@@ -93,8 +93,7 @@ class CalibrationRos {
   ros::Timer drain_timer_;
 
   InputHealth health_;
-  diagnostic_updater::Updater diagnostics_;
-  ros::Timer diagnostics_timer_;
+  std::unique_ptr<AdapterDiagnostics> diagnostics_;
 
   tf2_ros::Buffer tf_buffer_;
   std::unique_ptr<tf2_ros::TransformListener> tf_listener_;

@@ -12,20 +12,15 @@
 #include <string>
 #include <vector>
 
-#include <diagnostic_updater/diagnostic_updater.h>
-#include <diagnostic_updater/update_functions.h>
 #include <dynamic_reconfigure/server.h>
-#include <message_filters/subscriber.h>
 #include <ros/ros.h>
 #include <sensor_msgs/LaserScan.h>
 #include <sensor_msgs/PointCloud2.h>
-#include <tf2_ros/buffer.h>
-#include <tf2_ros/message_filter.h>
-#include <tf2_ros/transform_listener.h>
 
 #include "ladar_perception/HoughGroundConfig.h"
 #include "ladar_perception/HoughGroundFit.h"
 #include "ladar_perception/ground/hough_ground.h"
+#include "ladar_perception/ros/adapter_support.h"
 #include "ladar_perception/ros/input_health.h"
 
 namespace ladar_perception {
@@ -48,13 +43,9 @@ class HoughGroundRos {
   const InputHealth& health() const { return health_; }
 
  private:
-  void scanCallback(const sensor_msgs::LaserScanConstPtr& msg);
-  void tfFailure(const sensor_msgs::LaserScanConstPtr& msg,
-                 tf2_ros::filter_failure_reasons::FilterFailureReason reason);
   void process(const sensor_msgs::LaserScanConstPtr& msg);
   bool sensorPose(const sensor_msgs::LaserScan& msg, SensorPose* pose);
   void publishLine(const sensor_msgs::LaserScan& msg, const ScanGroundResult& result);
-  void reconfigure(HoughGroundConfig& config, uint32_t level);
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status);
 
   ros::NodeHandle nh_;
@@ -70,9 +61,8 @@ class HoughGroundRos {
   std::mutex config_mutex_;
   HoughGroundConfig config_;
   bool config_changed_ = true;
+  std::unique_ptr<MethodReconfigure<HoughGroundConfig>> method_reconfigure_;
   std::unique_ptr<dynamic_reconfigure::Server<HoughGroundConfig>> reconfigure_server_;
-  std::string last_method_;
-  std::vector<std::string> explicit_params_;  // thresholds given as parameters at start-up
 
   // Touched only by the processing callback (serialised by process_mutex_).
   std::mutex process_mutex_;
@@ -85,18 +75,9 @@ class HoughGroundRos {
   double mount_roll_ = 1.5707963267948966;
   double mount_pitch_ = 0.0;
 
-  tf2_ros::Buffer tf_buffer_;
-  std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
-  message_filters::Subscriber<sensor_msgs::LaserScan> scan_sub_;
-  std::unique_ptr<tf2_ros::MessageFilter<sensor_msgs::LaserScan>> tf_filter_;
-  ros::Subscriber direct_sub_;  // used when use_tf is false
-
   InputHealth health_;
-  diagnostic_updater::Updater diagnostics_;
-  double expected_rate_min_ = 50.0;
-  double expected_rate_max_ = 100.0;
-  std::unique_ptr<diagnostic_updater::FrequencyStatus> rate_status_;
-  ros::Timer diagnostics_timer_;
+  std::unique_ptr<AdapterDiagnostics> diagnostics_;
+  std::unique_ptr<SensorInput<sensor_msgs::LaserScan>> input_;  // built after the rest
 
   // Last fit, for diagnostics.
   mutable std::mutex fit_mutex_;

@@ -10,20 +10,15 @@
 #include <string>
 #include <vector>
 
-#include <diagnostic_updater/diagnostic_updater.h>
-#include <diagnostic_updater/update_functions.h>
 #include <dynamic_reconfigure/server.h>
-#include <message_filters/subscriber.h>
 #include <ros/ros.h>
 #include <sensor_msgs/PointCloud2.h>
-#include <tf2_ros/buffer.h>
-#include <tf2_ros/message_filter.h>
-#include <tf2_ros/transform_listener.h>
 
 #include "ladar_perception/VerticalScanGroundConfig.h"
 #include "ladar_perception/ground/ground_classification.h"
 #include "ladar_perception/ground/ground_model.h"
 #include "ladar_perception/ground/vertical_scan.h"
+#include "ladar_perception/ros/adapter_support.h"
 #include "ladar_perception/ros/input_health.h"
 
 namespace ladar_perception {
@@ -46,12 +41,8 @@ class VerticalScanGroundRos {
   const InputHealth& health() const { return health_; }
 
  private:
-  void cloudCallback(const sensor_msgs::PointCloud2ConstPtr& msg);
-  void tfFailure(const sensor_msgs::PointCloud2ConstPtr& msg,
-                 tf2_ros::filter_failure_reasons::FilterFailureReason reason);
   void process(const sensor_msgs::PointCloud2ConstPtr& msg);
   bool sensorPose(const sensor_msgs::PointCloud2& msg, SensorPose* pose);
-  void reconfigure(VerticalScanGroundConfig& config, uint32_t level);
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status);
   std::unique_ptr<GroundModel> makeModel(const VerticalScanGroundConfig& config);
 
@@ -66,9 +57,8 @@ class VerticalScanGroundRos {
   std::mutex config_mutex_;
   VerticalScanGroundConfig config_;
   bool config_changed_ = true;
+  std::unique_ptr<MethodReconfigure<VerticalScanGroundConfig>> method_reconfigure_;
   std::unique_ptr<dynamic_reconfigure::Server<VerticalScanGroundConfig>> reconfigure_server_;
-  std::string last_method_;
-  std::vector<std::string> explicit_params_;
 
   // Touched only by the processing callback (serialised by process_mutex_).
   std::mutex process_mutex_;
@@ -78,18 +68,9 @@ class VerticalScanGroundRos {
   bool use_tf_ = true;
   float sensor_height_ = 1.73f;
 
-  tf2_ros::Buffer tf_buffer_;
-  std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
-  message_filters::Subscriber<sensor_msgs::PointCloud2> cloud_sub_;
-  std::unique_ptr<tf2_ros::MessageFilter<sensor_msgs::PointCloud2>> tf_filter_;
-  ros::Subscriber direct_sub_;  // used when use_tf is false
-
   InputHealth health_;
-  diagnostic_updater::Updater diagnostics_;
-  double expected_rate_min_ = 5.0;
-  double expected_rate_max_ = 20.0;
-  std::unique_ptr<diagnostic_updater::FrequencyStatus> rate_status_;
-  ros::Timer diagnostics_timer_;
+  std::unique_ptr<AdapterDiagnostics> diagnostics_;
+  std::unique_ptr<SensorInput<sensor_msgs::PointCloud2>> input_;  // last: built after the rest
 
   std::atomic<const void*> last_input_{nullptr};
   mutable std::mutex last_mutex_;
