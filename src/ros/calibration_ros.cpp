@@ -149,6 +149,7 @@ std::size_t CalibrationRos::bufferedScans(bool target) const {
 
 void CalibrationRos::cloudCallback(const sensor_msgs::PointCloud2ConstPtr& msg, bool target) {
   try {
+    const ros::WallTime start = ros::WallTime::now();
     cal::PointVector points;
     std::string error;
     CloudError code = CloudError::kNone;
@@ -158,7 +159,9 @@ void CalibrationRos::cloudCallback(const sensor_msgs::PointCloud2ConstPtr& msg, 
                         msg->header.frame_id + "': " + error);
       return;
     }
-    enqueue(target, msg->header.frame_id, msg->header.stamp, std::move(points));
+    if (enqueue(target, msg->header.frame_id, msg->header.stamp, std::move(points))) {
+      health_.processed((ros::WallTime::now() - start).toSec());  // conversion + thinning
+    }
   } catch (const std::exception& e) {
     health_.error("callback failure", std::string("cloud callback: ") + e.what());
   }
@@ -166,6 +169,7 @@ void CalibrationRos::cloudCallback(const sensor_msgs::PointCloud2ConstPtr& msg, 
 
 void CalibrationRos::scanCallback(const sensor_msgs::LaserScanConstPtr& msg, bool target) {
   try {
+    const ros::WallTime start = ros::WallTime::now();
     cal::PointVector points;
     std::string error;
     if (!calibrationPoints(*msg, &points, &error)) {
@@ -173,13 +177,15 @@ void CalibrationRos::scanCallback(const sensor_msgs::LaserScanConstPtr& msg, boo
                                            " scan in frame '" + msg->header.frame_id + "': " + error);
       return;
     }
-    enqueue(target, msg->header.frame_id, msg->header.stamp, std::move(points));
+    if (enqueue(target, msg->header.frame_id, msg->header.stamp, std::move(points))) {
+      health_.processed((ros::WallTime::now() - start).toSec());  // conversion + thinning
+    }
   } catch (const std::exception& e) {
     health_.error("callback failure", std::string("scan callback: ") + e.what());
   }
 }
 
-void CalibrationRos::enqueue(bool target, const std::string& frame, const ros::Time& stamp,
+bool CalibrationRos::enqueue(bool target, const std::string& frame, const ros::Time& stamp,
                              cal::PointVector&& points) {
   if (buffer_voxel_ > 0) points = cal::voxelDownsample(points, buffer_voxel_);
   std::lock_guard<std::mutex> lock(mutex_);
@@ -189,7 +195,7 @@ void CalibrationRos::enqueue(bool target, const std::string& frame, const ros::T
     health_.error("unexpected frame", std::string(target ? "target" : "reference") +
                                           " message in frame '" + frame + "', expected '" +
                                           s.frame + "'; ignored");
-    return;
+    return false;
   }
   s.pending.push_back({stamp, std::move(points)});
   while (s.pending.size() > static_cast<std::size_t>(4 * buffer_size_)) {
@@ -201,6 +207,7 @@ void CalibrationRos::enqueue(bool target, const std::string& frame, const ros::T
                       "pose; oldest dropped (" << suppressed << " more since the last message)");
     }
   }
+  return true;
 }
 
 void CalibrationRos::drainPending(const ros::TimerEvent&) {
@@ -222,7 +229,6 @@ void CalibrationRos::drainPending(const ros::TimerEvent&) {
           s.pending.pop_front();
           s.buffer.push_back(std::move(b));
           while (s.buffer.size() > static_cast<std::size_t>(buffer_size_)) s.buffer.pop_front();
-          health_.processed(0.0);
           continue;
         }
         // Waited too long, or stamped far ahead of the clock (a bag that looped back in time:

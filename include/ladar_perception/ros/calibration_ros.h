@@ -72,7 +72,8 @@ class CalibrationRos {
 
   void cloudCallback(const sensor_msgs::PointCloud2ConstPtr& msg, bool target);
   void scanCallback(const sensor_msgs::LaserScanConstPtr& msg, bool target);
-  void enqueue(bool target, const std::string& frame, const ros::Time& stamp,
+  // False when the message was ignored (not the sensor's frame).
+  bool enqueue(bool target, const std::string& frame, const ros::Time& stamp,
                calibration::PointVector&& points);
   void drainPending(const ros::TimerEvent&);
   bool calibrateService(ladar_perception::Calibrate::Request& req,
