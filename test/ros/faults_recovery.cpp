@@ -27,51 +27,16 @@
 #include "ladar_perception/ros/calibration_ros.h"
 #include "ladar_perception/ros/cloud_conversion.h"
 #include "ladar_perception/ros/vertical_scan_ground_ros.h"
+#include "rostest_support.h"
 
 namespace lp = ladar_perception;
 
 namespace {
 
-bool waitFor(const std::function<bool()>& done, double seconds = 30.0) {
-  const ros::WallTime end = ros::WallTime::now() + ros::WallDuration(seconds);
-  while (ros::ok() && ros::WallTime::now() < end) {
-    if (done()) return true;
-    ros::WallDuration(0.002).sleep();
-  }
-  return done();
-}
-
-struct Counter {
-  std::atomic<int> count{0};
-  void callback(const sensor_msgs::PointCloud2ConstPtr&) { ++count; }
-};
-
-lp::PackedCloud flatCloud(int n) {
-  lp::PackedCloud c;
-  c.layout = lp::velodyneXYZIRTLayout(static_cast<uint32_t>(n));
-  c.data.assign(static_cast<std::size_t>(c.layout.row_step) * c.layout.height, 0);
-  const lp::CloudLayout& L = c.layout;
-  for (int i = 0; i < n; ++i) {
-    const int ring = i % 16;
-    const double elev = (-20.0 + ring) * M_PI / 180.0;
-    const double az = (i / 16) * 2.0 * M_PI / std::max(1, n / 16);
-    const double range = 1.8 / std::sin(-elev);
-    uint8_t* p = c.data.data() + static_cast<std::size_t>(i) * L.point_step;
-    lp::writeField(p, *lp::findField(L, "x"), range * std::cos(elev) * std::cos(az));
-    lp::writeField(p, *lp::findField(L, "y"), range * std::cos(elev) * std::sin(az));
-    lp::writeField(p, *lp::findField(L, "z"), range * std::sin(elev));
-    lp::writeField(p, *lp::findField(L, "ring"), ring);
-  }
-  return c;
-}
-
-sensor_msgs::PointCloud2ConstPtr cloudMsg(const lp::PackedCloud& c, const std::string& frame,
-                                          ros::Time stamp) {
-  sensor_msgs::PointCloud2Ptr m = lp::toMessage(c);
-  m->header.frame_id = frame;
-  m->header.stamp = stamp;
-  return m;
-}
+using ladar_perception::rostest::waitFor;
+using ladar_perception::rostest::Counter;
+using ladar_perception::rostest::flatCloud;
+using ladar_perception::rostest::cloudMsg;
 
 geometry_msgs::TransformStamped transform(const std::string& parent, const std::string& child,
                                           double z, ros::Time stamp) {
@@ -102,7 +67,7 @@ TEST_F(Faults, TfLateNeverAndJumpingBack) {
   pnh.setParam("queue_size", 3);
   lp::VerticalScanGroundRos adapter(nh, pnh);
   Counter classified;
-  ros::Subscriber sub = nh.subscribe("classified", 100, &Counter::callback, &classified);
+  ros::Subscriber sub = nh.subscribe("classified", 100, &Counter::callback<sensor_msgs::PointCloud2ConstPtr>, &classified);
   ros::Publisher pub = nh.advertise<sensor_msgs::PointCloud2>("points", 100);
   // tf through a plain publisher so the test can wait until the adapter's listener is connected
   // (a transform published before that would be lost, which is not the fault under test).
@@ -181,7 +146,7 @@ TEST_F(Faults, TfLateNeverAndJumpingBack) {
 TEST_F(Faults, ManagerRestartedMidStream) {
   ros::NodeHandle nh;
   Counter classified;
-  ros::Subscriber sub = nh.subscribe("/restart/classified", 100, &Counter::callback, &classified);
+  ros::Subscriber sub = nh.subscribe("/restart/classified", 100, &Counter::callback<sensor_msgs::PointCloud2ConstPtr>, &classified);
   ros::Publisher pub = nh.advertise<sensor_msgs::PointCloud2>("/restart/points", 10);
   const lp::PackedCloud cloud = flatCloud(1600);
   // The bag keeps playing at 20 Hz while the manager goes down and comes back.

@@ -22,10 +22,14 @@
 #include "ladar_perception/HoughGroundFit.h"
 #include "ladar_perception/ros/cloud_conversion.h"
 #include "ladar_perception/ros/hough_ground_ros.h"
+#include "rostest_support.h"
 
 namespace lp = ladar_perception;
 
 namespace {
+
+using ladar_perception::rostest::waitFor;
+using ladar_perception::rostest::Latest;
 
 constexpr double kHeight = 1.2;
 
@@ -56,31 +60,6 @@ Scan makeScan(const std::string& frame) {
     s.height.push_back(static_cast<float>(kHeight + s.msg->ranges[k] * std::sin(a)));
   }
   return s;
-}
-
-template <typename M>
-struct Latest {
-  std::mutex mutex;
-  boost::shared_ptr<const M> msg;
-  std::atomic<int> count{0};
-  void callback(const boost::shared_ptr<const M>& m) {
-    std::lock_guard<std::mutex> lock(mutex);
-    msg = m;
-    ++count;
-  }
-  boost::shared_ptr<const M> get() {
-    std::lock_guard<std::mutex> lock(mutex);
-    return msg;
-  }
-};
-
-bool waitFor(const std::function<bool()>& done, double seconds = 10.0) {
-  const ros::WallTime end = ros::WallTime::now() + ros::WallDuration(seconds);
-  while (ros::ok() && ros::WallTime::now() < end) {
-    if (done()) return true;
-    ros::WallDuration(0.01).sleep();
-  }
-  return done();
 }
 
 class HoughGroundTest : public ::testing::Test {

@@ -10,19 +10,9 @@
 #include <sensor_msgs/PointCloud2.h>
 
 #include "ladar_perception/HoughGroundFit.h"
+#include "rostest_support.h"
 
-namespace {
-
-bool waitFor(const std::function<bool()>& done, double seconds) {
-  const ros::WallTime end = ros::WallTime::now() + ros::WallDuration(seconds);
-  while (ros::ok() && ros::WallTime::now() < end) {
-    if (done()) return true;
-    ros::WallDuration(0.05).sleep();
-  }
-  return done();
-}
-
-}  // namespace
+using ladar_perception::rostest::waitFor;
 
 TEST(LaunchDemo, SimulatorDrivesBothGroundNodelets) {
   ros::NodeHandle nh;

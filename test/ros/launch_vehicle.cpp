@@ -17,19 +17,13 @@
 #include "ladar_perception/cloud/point_cloud_view.h"
 #include "ladar_perception/ros/cloud_conversion.h"
 #include "ladar_perception/sim/sensor_rig.h"
+#include "rostest_support.h"
 
 namespace lp = ladar_perception;
 
 namespace {
 
-bool waitFor(const std::function<bool()>& done, double seconds) {
-  const ros::WallTime end = ros::WallTime::now() + ros::WallDuration(seconds);
-  while (ros::ok() && ros::WallTime::now() < end) {
-    if (done()) return true;
-    ros::WallDuration(0.02).sleep();
-  }
-  return done();
-}
+using ladar_perception::rostest::waitFor;
 
 bool advertised(const std::string& topic) {
   ros::master::V_TopicInfo topics;

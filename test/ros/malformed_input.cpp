@@ -30,21 +30,19 @@
 #include "ladar_perception/ros/cloud_conversion.h"
 #include "ladar_perception/ros/hough_ground_ros.h"
 #include "ladar_perception/ros/vertical_scan_ground_ros.h"
+#include "rostest_support.h"
 
 namespace lp = ladar_perception;
 
 namespace {
 
-constexpr double kThrottle = 5.0;  // InputHealth's and the calibration's throttle period [s]
+using ladar_perception::rostest::waitFor;
+using ladar_perception::rostest::Counter;
+using ladar_perception::rostest::flatCloud;
+using ladar_perception::rostest::cloudMsg;
 
-bool waitFor(const std::function<bool()>& done, double seconds = 30.0) {
-  const ros::WallTime end = ros::WallTime::now() + ros::WallDuration(seconds);
-  while (ros::ok() && ros::WallTime::now() < end) {
-    if (done()) return true;
-    ros::WallDuration(0.0005).sleep();
-  }
-  return done();
-}
+constexpr double kPacingPoll = 0.0005;  // [s] between checks while pacing the message stream
+constexpr double kThrottle = 5.0;  // InputHealth's and the calibration's throttle period [s]
 
 // Every /rosout line of this process (the adapters log through it).
 struct LogCollector {
@@ -109,40 +107,6 @@ std::map<std::string, int> linesPerKind(const std::vector<std::string>& lines,
     ++kinds[close == std::string::npos ? std::string("?") : l.substr(open + 1, close - open - 1)];
   }
   return kinds;
-}
-
-struct Counter {
-  std::atomic<int> count{0};
-  template <typename M>
-  void callback(const M&) { ++count; }
-};
-
-// --- Clouds.
-lp::PackedCloud flatCloud(int n, float sensor_height = 1.8f) {
-  lp::PackedCloud c;
-  c.layout = lp::velodyneXYZIRTLayout(static_cast<uint32_t>(n));
-  c.data.assign(static_cast<std::size_t>(c.layout.row_step) * c.layout.height, 0);
-  const lp::CloudLayout& L = c.layout;
-  for (int i = 0; i < n; ++i) {
-    const int ring = i % 16;
-    const double elev = (-20.0 + ring) * M_PI / 180.0;
-    const double az = (i / 16) * 2.0 * M_PI / std::max(1, n / 16);
-    const double range = sensor_height / std::sin(-elev);
-    uint8_t* p = c.data.data() + static_cast<std::size_t>(i) * L.point_step;
-    lp::writeField(p, *lp::findField(L, "x"), range * std::cos(elev) * std::cos(az));
-    lp::writeField(p, *lp::findField(L, "y"), range * std::cos(elev) * std::sin(az));
-    lp::writeField(p, *lp::findField(L, "z"), range * std::sin(elev));
-    lp::writeField(p, *lp::findField(L, "ring"), ring);
-  }
-  return c;
-}
-
-sensor_msgs::PointCloud2Ptr cloudMsg(const lp::PackedCloud& c, const std::string& frame,
-                                     ros::Time stamp) {
-  sensor_msgs::PointCloud2Ptr m = lp::toMessage(c);
-  m->header.frame_id = frame;
-  m->header.stamp = stamp;
-  return m;
 }
 
 enum class CloudFault {
@@ -287,7 +251,7 @@ TEST_F(Fixture, VerticalScanGroundSurvivesMalformedClouds) {
     ASSERT_TRUE(waitFor([&] {
       return adapter.health().errorCount("unreadable cloud") == static_cast<uint64_t>(bad) &&
              classified.count == good;
-    })) << "message " << i << " (" << what << "): "
+    }, 30.0, kPacingPoll)) << "message " << i << " (" << what << "): "
         << adapter.health().errorCount("unreadable cloud") << " of "
         << bad << " rejected, " << classified.count << " of " << good << " classified";
   }
@@ -376,7 +340,7 @@ TEST_F(Fixture, HoughGroundSurvivesMalformedScans) {
     ASSERT_TRUE(waitFor([&] {
       return adapter.health().errorCount("unreadable scan") == static_cast<uint64_t>(bad) &&
              classified.count == good;
-    })) << "scan " << i << ": " << adapter.health().errorCount("unreadable scan") << " of " << bad
+    }, 30.0, kPacingPoll)) << "scan " << i << ": " << adapter.health().errorCount("unreadable scan") << " of " << bad
         << " rejected, " << classified.count << " of " << good << " classified";
   }
   EXPECT_GE(bad, 1000);

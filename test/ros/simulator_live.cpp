@@ -14,24 +14,18 @@
 
 #include "ladar_perception/ros/cloud_conversion.h"
 #include "ladar_perception/sim/sensor_rig.h"
+#include "rostest_support.h"
 
 namespace ladar_perception {
 namespace {
+
+using ladar_perception::rostest::waitFor;
 
 struct Inbox {
   std::mutex mutex;
   std::map<ros::Time, sensor_msgs::PointCloud2ConstPtr> clouds, truths;
   std::vector<sensor_msgs::LaserScanConstPtr> scans;
 };
-
-bool waitFor(const std::function<bool()>& done, double seconds) {
-  const ros::WallTime end = ros::WallTime::now() + ros::WallDuration(seconds);
-  while (ros::ok() && ros::WallTime::now() < end) {
-    if (done()) return true;
-    ros::WallDuration(0.05).sleep();
-  }
-  return done();
-}
 
 TEST(SimulatorLive, PublishesScansTruthAndTf) {
   ros::NodeHandle nh;

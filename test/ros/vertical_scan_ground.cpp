@@ -18,10 +18,14 @@
 #include "ladar_perception/cloud/point_cloud_view.h"
 #include "ladar_perception/ros/cloud_conversion.h"
 #include "ladar_perception/ros/vertical_scan_ground_ros.h"
+#include "rostest_support.h"
 
 namespace lp = ladar_perception;
 
 namespace {
+
+using ladar_perception::rostest::waitFor;
+using Latest = ladar_perception::rostest::Latest<sensor_msgs::PointCloud2>;
 
 constexpr double kSensorHeight = 1.8;
 
@@ -77,35 +81,7 @@ Scene makeScene(const lp::CloudLayout& base_layout) {
 }
 
 sensor_msgs::PointCloud2Ptr toMsg(const lp::PackedCloud& cloud, const std::string& frame) {
-  sensor_msgs::PointCloud2Ptr msg = lp::toMessage(cloud);
-  msg->header.frame_id = frame;
-  msg->header.stamp = ros::Time::now();
-  return msg;
-}
-
-// Collects the latest message of a topic.
-struct Latest {
-  std::mutex mutex;
-  sensor_msgs::PointCloud2ConstPtr msg;
-  std::atomic<int> count{0};
-  void callback(const sensor_msgs::PointCloud2ConstPtr& m) {
-    std::lock_guard<std::mutex> lock(mutex);
-    msg = m;
-    ++count;
-  }
-  sensor_msgs::PointCloud2ConstPtr get() {
-    std::lock_guard<std::mutex> lock(mutex);
-    return msg;
-  }
-};
-
-bool waitFor(const std::function<bool()>& done, double seconds = 10.0) {
-  const ros::WallTime end = ros::WallTime::now() + ros::WallDuration(seconds);
-  while (ros::ok() && ros::WallTime::now() < end) {
-    if (done()) return true;
-    ros::WallDuration(0.01).sleep();
-  }
-  return done();
+  return ladar_perception::rostest::cloudMsg(cloud, frame, ros::Time::now());
 }
 
 class VerticalScanGroundTest : public ::testing::Test {
