@@ -8,22 +8,13 @@
 #include "ladar_perception/sim/random.h"
 #include "ladar_perception/sim/ray_caster.h"
 #include "ladar_perception/sim/world.h"
+#include "sim_standard_worlds.h"
 
 namespace ladar_perception {
 namespace sim {
 namespace {
 
-const World& standard(const std::string& name) {
-  static std::map<std::string, World> cache;
-  auto it = cache.find(name);
-  if (it == cache.end()) {
-    World w;
-    std::string error;
-    EXPECT_TRUE(makeStandardWorld(name, 5, &w, &error)) << error;
-    it = cache.emplace(name, std::move(w)).first;
-  }
-  return it->second;
-}
+const World& standard(const std::string& name) { return cachedStandardWorld(name, 5); }
 
 Eigen::Vector3d direction(double azimuth, double elevation) {
   return Eigen::Vector3d(std::cos(elevation) * std::cos(azimuth),
@@ -91,7 +82,9 @@ TEST(SimRayCaster, PyramidMatchesCellByCellTraversal) {
       // Any start level gives the same hit.
       const int level = (k % 3 == 0) ? startLevelFor(w, origin) : rng.uniformInt(0, w.pyramidLevels() - 1);
       ASSERT_EQ(castRay(w, origin, dir, 120.0, level, &hinted), a) << name << " ray " << k;
-      if (a) EXPECT_EQ(hinted.range, fast.range) << name << " ray " << k;
+      if (a) {
+        EXPECT_EQ(hinted.range, fast.range) << name << " ray " << k;
+      }
       if (!a) continue;
       ++hits;
       EXPECT_NEAR(fast.range, slow.range, 1e-9) << name << " ray " << k;

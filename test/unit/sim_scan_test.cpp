@@ -7,22 +7,13 @@
 
 #include "ladar_perception/sim/scan_simulator.h"
 #include "ladar_perception/sim/world.h"
+#include "sim_standard_worlds.h"
 
 namespace ladar_perception {
 namespace sim {
 namespace {
 
-const World& standard(const std::string& name) {
-  static std::map<std::string, World> cache;
-  auto it = cache.find(name);
-  if (it == cache.end()) {
-    World w;
-    std::string error;
-    EXPECT_TRUE(makeStandardWorld(name, 9, &w, &error)) << error;
-    it = cache.emplace(name, std::move(w)).first;
-  }
-  return it->second;
-}
+const World& standard(const std::string& name) { return cachedStandardWorld(name, 9); }
 
 Eigen::Isometry3d at(double x, double y, double z) {
   Eigen::Isometry3d p = Eigen::Isometry3d::Identity();

@@ -10,22 +10,13 @@
 #include "ladar_perception/io/image.h"
 #include "ladar_perception/sim/trajectory.h"
 #include "ladar_perception/sim/world.h"
+#include "sim_standard_worlds.h"
 
 namespace ladar_perception {
 namespace sim {
 namespace {
 
-const World& standard(const std::string& name) {
-  static std::map<std::string, World> cache;
-  auto it = cache.find(name);
-  if (it == cache.end()) {
-    World w;
-    std::string error;
-    EXPECT_TRUE(makeStandardWorld(name, 7, &w, &error)) << error;
-    it = cache.emplace(name, std::move(w)).first;
-  }
-  return it->second;
-}
+const World& standard(const std::string& name) { return cachedStandardWorld(name, 7); }
 
 TEST(SimWorld, ClassNamesRoundTripAndGroups) {
   for (int k = 0; k < kNumSurfaceClasses; ++k) {
@@ -51,7 +42,7 @@ TEST(SimWorld, UnknownWorldIsAnError) {
 }
 
 TEST(SimWorld, GenerationIsDeterministicForASeed) {
-  for (const std::string& name : {"thesis", "urban", "rural", "potholes"}) {
+  for (const char* name : {"thesis", "urban", "rural", "potholes"}) {
     World a, b, c;
     std::string error;
     ASSERT_TRUE(makeStandardWorld(name, 42, &a, &error)) << error;
@@ -174,7 +165,9 @@ TEST(SimWorld, RuralRoadCrossSection) {
       EXPECT_NEAR(w.height(x, side * 11.05) - w.height(x, side * 10.05), 0.25, 0.01) << x;
       // Everything beside the road lies well below it: a plane through the road misses it.
       for (double ay = 7.0; ay <= 50.0; ay += 0.5) {
-        if (isGroundClass(w.surfaceClass(x, side * ay))) EXPECT_LT(w.height(x, side * ay), 0.25) << x << " " << ay;
+        if (isGroundClass(w.surfaceClass(x, side * ay))) {
+          EXPECT_LT(w.height(x, side * ay), 0.25) << x << " " << ay;
+        }
       }
     }
   }
