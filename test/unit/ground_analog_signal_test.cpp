@@ -6,6 +6,7 @@
 #include <limits>
 
 #include "ground_surface_scene.h"
+#include "ground_world_eval.h"
 #include "ladar_perception/ground/analog_signal.h"
 #include "ladar_perception/ground/ground_evaluation.h"
 #include "ladar_perception/ground/ground_model.h"
@@ -15,41 +16,9 @@ using surface_test::SurfaceScene;
 
 namespace {
 
-struct Score {
-  double ground_recall = 0, obstacle_recall = 0;
-};
-
-Score score(lp::GroundModel* model, const SurfaceScene& scene, bool with_ring = true) {
-  lp::PackedCloud cloud;
-  std::vector<uint8_t> truth;
-  scene.revolution(&cloud, &truth, with_ring);
-  lp::PointCloudView view;
-  EXPECT_TRUE(cloud.view(&view));
-  lp::GroundClassification result;
-  model->classify(view, lp::SensorPose::fromHeight(static_cast<float>(scene.sensor_height)), &result);
-  EXPECT_EQ(result.size(), view.size());
-  std::size_t g = 0, g_ok = 0, o = 0, o_ok = 0;
-  for (std::size_t i = 0; i < view.size(); ++i) {
-    const Eigen::Vector3f p = view.xyz(i);
-    if (truth[i] == 0) {
-      ++g;
-      g_ok += result.labels[i] == lp::kLabelGround;
-    } else if (p.z() + scene.sensor_height - scene.ground(p.x(), p.y()) > 0.3) {
-      ++o;
-      o_ok += result.labels[i] == lp::kLabelObstacle;
-    }
-  }
-  Score s;
-  s.ground_recall = g ? static_cast<double>(g_ok) / g : 1.0;
-  s.obstacle_recall = o ? static_cast<double>(o_ok) / o : 1.0;
-  return s;
-}
-
-SurfaceScene withCar(SurfaceScene scene) {
-  scene.boxes.push_back({{10.0, -1.0, -1.0}, {14.5, 1.0, 1.5}});
-  scene.boxes.push_back({{-8.0, 5.0, -1.0}, {-7.7, 5.3, 3.0}});
-  return scene;
-}
+using surface_test::Score;
+using surface_test::score;
+using surface_test::withCar;
 
 TEST(AnalogSignal, SelectableByName) {
   std::string error;
@@ -116,18 +85,8 @@ TEST(AnalogSignal, EmptyAndNaNClouds) {
   EXPECT_EQ(result.size(), 0u);
 }
 
-lp::GroundAccuracy evaluateWorld(const std::string& world, lp::GroundModel* model) {
-  lp::GroundAccuracy acc;
-  std::string error;
-  EXPECT_TRUE(lp::evaluateGroundModel(world, model, lp::sim::NoiseProfile::kDatasheet, 3, 1, &acc, &error))
-      << error;
-  return acc;
-}
-
-double classRecall(const lp::GroundAccuracy& acc, lp::sim::SurfaceClass c) {
-  const int k = static_cast<int>(c);
-  return lp::GroundAccuracy::ratio(acc.class_correct[k], acc.class_points[k]);
-}
+using lp::testing_support::classRecall;
+using lp::testing_support::evaluateWorld;
 
 // The thesis's finding on the simulator's worlds (ground_eval's table, 3 revolutions here):
 // right on the flat worlds, wrong on the crowned rural road. Each laser's ring crosses the road

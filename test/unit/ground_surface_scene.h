@@ -9,11 +9,16 @@
 #include <vector>
 
 #include <Eigen/Core>
+#include <gtest/gtest.h>
 
 #include "ladar_perception/cloud/laser_elevations.h"
 #include "ladar_perception/cloud/point_cloud_view.h"
+#include "ladar_perception/ground/ground_classification.h"
+#include "ladar_perception/ground/ground_model.h"
 
 namespace surface_test {
+
+namespace lp = ladar_perception;
 
 struct Box {
   Eigen::Vector3d lo, hi;
@@ -120,11 +125,44 @@ struct SurfaceScene {
   }
 };
 
-// Ground recall and obstacle recall of labels against truth; obstacles count only where the
-// return is more than `min_obstacle_height` above the ground function (the lowest centimetres
-// of any obstacle face are ground-like to every method).
-struct Recall {
-  double ground = 0.0, obstacle = 0.0;
+// Ground recall and obstacle recall of a model's labels on one revolution of a scene; obstacles
+// count only where the return is more than 0.3 m above the ground function (the lowest
+// centimetres of any obstacle face are ground-like to every method).
+struct Score {
+  double ground_recall = 0, obstacle_recall = 0;
 };
+
+inline Score score(lp::GroundModel* model, const SurfaceScene& scene, bool with_ring = true) {
+  lp::PackedCloud cloud;
+  std::vector<uint8_t> truth;
+  scene.revolution(&cloud, &truth, with_ring);
+  lp::PointCloudView view;
+  EXPECT_TRUE(cloud.view(&view));
+  lp::GroundClassification result;
+  model->classify(view, lp::SensorPose::fromHeight(static_cast<float>(scene.sensor_height)), &result);
+  EXPECT_EQ(result.size(), view.size());
+  std::size_t g = 0, g_ok = 0, o = 0, o_ok = 0;
+  for (std::size_t i = 0; i < view.size(); ++i) {
+    const Eigen::Vector3f p = view.xyz(i);
+    if (truth[i] == 0) {
+      ++g;
+      g_ok += result.labels[i] == lp::kLabelGround;
+    } else if (p.z() + scene.sensor_height - scene.ground(p.x(), p.y()) > 0.3) {
+      ++o;
+      o_ok += result.labels[i] == lp::kLabelObstacle;
+    }
+  }
+  Score s;
+  s.ground_recall = g ? static_cast<double>(g_ok) / g : 1.0;
+  s.obstacle_recall = o ? static_cast<double>(o_ok) / o : 1.0;
+  return s;
+}
+
+// The scene with a car ahead and a pole behind on the left.
+inline SurfaceScene withCar(SurfaceScene scene) {
+  scene.boxes.push_back({{10.0, -1.0, -1.0}, {14.5, 1.0, 1.5}});
+  scene.boxes.push_back({{-8.0, 5.0, -1.0}, {-7.7, 5.3, 3.0}});
+  return scene;
+}
 
 }  // namespace surface_test
