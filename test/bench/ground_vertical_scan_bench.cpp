@@ -5,7 +5,11 @@
 //
 // Instruction count of one call (callgrind):
 //   valgrind --tool=callgrind --instr-atstart=no ground_vertical_scan_bench --callgrind-once FILE.bin
-// loads the file, warms nothing, and instruments exactly one classify call.
+// loads the file, warms nothing, and instruments exactly one classify call (--thesis: the thesis
+// mode; --warm: after one uninstrumented call, as in a running stream).
+// Output of one call for comparisons between builds:
+//   ground_vertical_scan_bench --dump FILE.bin OUT [--thesis]   (n label bytes, n floats)
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <iostream>
@@ -83,7 +87,7 @@ void BM_SimulatedUrban(benchmark::State& state, bool thesis) {
               thesis ? verticalScanThesisParams() : verticalScanDefaultParams());
 }
 
-int callgrindOnce(const std::string& path, bool thesis) {
+int callgrindOnce(const std::string& path, bool thesis, bool warm) {
   PackedCloud cloud;
   std::string error;
   PointCloudView view;
@@ -93,6 +97,9 @@ int callgrindOnce(const std::string& path, bool thesis) {
   }
   VerticalScanGround model(thesis ? verticalScanThesisParams() : verticalScanDefaultParams());
   GroundClassification out;
+  // --warm: the workspace of a steady-state call (allocated and touched once before), e.g. for
+  // --cache-sim=yes.
+  if (warm) model.classify(view, SensorPose::fromHeight(1.73f), &out);
   CALLGRIND_START_INSTRUMENTATION;
   model.classify(view, SensorPose::fromHeight(1.73f), &out);
   CALLGRIND_STOP_INSTRUMENTATION;
@@ -100,11 +107,43 @@ int callgrindOnce(const std::string& path, bool thesis) {
   return 0;
 }
 
+// Writes the labels and P(obstacle) of one classify call (n label bytes, then n floats): a
+// byte-for-byte comparison of two builds, e.g. before and after a speed change.
+int dumpOnce(const std::string& path, const std::string& out_path, bool thesis) {
+  PackedCloud cloud;
+  std::string error;
+  PointCloudView view;
+  if (!readKittiBin(path, &cloud, &error) || !cloud.view(&view, &error)) {
+    std::cerr << error << "\n";
+    return 1;
+  }
+  VerticalScanGround model(thesis ? verticalScanThesisParams() : verticalScanDefaultParams());
+  GroundClassification out;
+  model.classify(view, SensorPose::fromHeight(1.73f), &out);
+  std::FILE* f = std::fopen(out_path.c_str(), "wb");
+  if (!f) {
+    std::cerr << "cannot write " << out_path << "\n";
+    return 1;
+  }
+  const bool ok = std::fwrite(out.labels.data(), 1, out.size(), f) == out.size() &&
+                  std::fwrite(out.p_obstacle.data(), sizeof(float), out.size(), f) == out.size();
+  std::fclose(f);
+  return ok ? 0 : 1;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   if (argc >= 3 && std::strcmp(argv[1], "--callgrind-once") == 0) {
-    return callgrindOnce(argv[2], argc >= 4 && std::strcmp(argv[3], "--thesis") == 0);
+    bool thesis = false, warm = false;
+    for (int a = 3; a < argc; ++a) {
+      thesis = thesis || std::strcmp(argv[a], "--thesis") == 0;
+      warm = warm || std::strcmp(argv[a], "--warm") == 0;
+    }
+    return callgrindOnce(argv[2], thesis, warm);
+  }
+  if (argc >= 4 && std::strcmp(argv[1], "--dump") == 0) {
+    return dumpOnce(argv[2], argv[3], argc >= 5 && std::strcmp(argv[4], "--thesis") == 0);
   }
   for (const char* f : {"000000.bin", "000001.bin"}) {
     benchmark::RegisterBenchmark((std::string("VerticalScan/kitti/") + f).c_str(),

@@ -237,8 +237,10 @@ class VerticalScanGround : public GroundModel {
   ScratchBuffer<uint32_t> bin_;   // bin per input point, unknown_bin_ for unknown returns
   uint32_t unknown_bin_ = 0;      // one past the bin grid
   std::vector<uint32_t> bin_start_;   // counting sort of points by bin
-  ScratchBuffer<uint32_t> order_;  // valid points by bin (input order within a bin)
-  ScratchBuffer<float> order_r_;   // their r, alike (padded for 4-wide reads past a bin)
+  ScratchBuffer<uint32_t> run_start_;  // first point of each run of one bin, then n
+  // The points' r and height by bin (input order within a bin); r padded for 4-wide reads
+  // past the last bin.
+  ScratchBuffer<float> order_r_, order_h_;
   std::vector<uint64_t> big_bin_;  // rangeKey()s of one large bin (median by selection)
   std::vector<float> atan_lut_;   // atan(t), t in [0, 1], in column units
   float octant_offset_[8] = {}, octant_sign_[8] = {};  // atan2 = offset + sign * atan LUT

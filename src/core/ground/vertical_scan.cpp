@@ -495,7 +495,6 @@ void VerticalScanGround::binPoints(const PointCloudView& view, const SensorPose&
   std::memcpy(octant_sign, octant_sign_, sizeof(octant_sign));
   const int shift = row_shift_;
   const uint32_t unknown_bin = unknown_bin_;
-  uint32_t* __restrict count = bin_start_.data() + 1;
   uint32_t* __restrict bins = bin_.data();
   float* __restrict rr = r_.data();
   float* __restrict hh = height_.data();
@@ -535,7 +534,6 @@ void VerticalScanGround::binPoints(const PointCloudView& view, const SensorPose&
     const float quarter = 0.25f * static_cast<float>(columns_);
     const __m128 v_quarter = _mm_set1_ps(quarter), v_half_turn = _mm_set1_ps(2.f * quarter);
     const __m128 v_sign_bit = _mm_castsi128_ps(_mm_set1_epi32(static_cast<int>(0x80000000u)));
-    alignas(16) uint32_t bin4[4];
     for (; i + 4 <= n; i += 4) {
       const uint8_t* pt = src + i * step;
       __m128 X = _mm_loadu_ps(reinterpret_cast<const float*>(pt));
@@ -562,7 +560,6 @@ void VerticalScanGround::binPoints(const PointCloudView& view, const SensorPose&
           labels[i + l] = kLabelUnknown;
           prob[i + l] = 0.f;
         }
-        count[unknown_bin] += 4;
         continue;
       }
       const __m128i valid_i = _mm_castps_si128(valid);
@@ -618,11 +615,6 @@ void VerticalScanGround::binPoints(const PointCloudView& view, const SensorPose&
         }
       }
       _mm_storeu_si128(reinterpret_cast<__m128i*>(bins + i), bin);
-      _mm_store_si128(reinterpret_cast<__m128i*>(bin4), bin);
-      ++count[bin4[0]];
-      ++count[bin4[1]];
-      ++count[bin4[2]];
-      ++count[bin4[3]];
     }
   }
 #endif
@@ -642,7 +634,6 @@ void VerticalScanGround::binPoints(const PointCloudView& view, const SensorPose&
     // NaN compares false: NaN/Inf and out-of-range returns are unknown.
     if (!(d2 >= min_r2 && d2 <= max_r2)) {
       bins[i] = unknown_bin;
-      ++count[unknown_bin];
       rr[i] = 0.f;
       hh[i] = 0.f;
       labels[i] = kLabelUnknown;
@@ -682,7 +673,6 @@ void VerticalScanGround::binPoints(const PointCloudView& view, const SensorPose&
     bins[i] = bin;
     rr[i] = r > kMinR ? r : kMinR;
     hh[i] = gz;
-    ++count[bin];
   }
 }
 
@@ -699,8 +689,8 @@ void VerticalScanGround::classify(const PointCloudView& view, const SensorPose& 
   r_.resize(n);
   height_.resize(n);
   bin_.resize(n);
-  // Bin `bins` (one past the grid) collects the unknown returns: counted and sorted like the
-  // others, so the counting sort needs no test, but never fitted.
+  run_start_.resize(n + 1);
+  // Bin `bins` (one past the grid) marks the unknown returns: never sorted, never fitted.
   unknown_bin_ = static_cast<uint32_t>(bins);
   bin_start_.resize(bins + 2);
   zeroFill(bin_start_.data(), bins + 2);
@@ -730,7 +720,37 @@ void VerticalScanGround::classify(const PointCloudView& view, const SensorPose& 
     else binPoints<false, false, false>(view, pose, out);
   }
 
-  // Counting sort of the valid points by bin (3.3 step 1).
+  // Counting sort of the valid points by bin (3.3 step 1), by runs: consecutive points mostly
+  // share a bin (a laser's sweep crosses a column in several returns), so the points are
+  // counted and moved a run at a time. Unknown returns are neither counted nor moved.
+  const uint32_t* __restrict bins_in = bin_.data();
+  uint32_t* __restrict run_start = run_start_.data();
+  uint32_t* __restrict count = bin_start_.data() + 1;
+  std::size_t runs = 0;
+  {
+    // Run boundaries: the positions i > 0 whose bin differs from the bin of i - 1.
+    run_start[runs++] = 0;
+    std::size_t i = 1;
+#if defined(__SSE2__)
+    for (; i + 4 <= n; i += 4) {
+      const __m128i here = _mm_loadu_si128(reinterpret_cast<const __m128i*>(bins_in + i));
+      const __m128i before = _mm_loadu_si128(reinterpret_cast<const __m128i*>(bins_in + i - 1));
+      unsigned changed = ~static_cast<unsigned>(_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(here, before)))) & 0xFu;
+      while (changed) {
+        run_start[runs++] = static_cast<uint32_t>(i + __builtin_ctz(changed));
+        changed &= changed - 1;
+      }
+    }
+#endif
+    for (; i < n; ++i) {
+      if (bins_in[i] != bins_in[i - 1]) run_start[runs++] = static_cast<uint32_t>(i);
+    }
+    run_start[runs] = static_cast<uint32_t>(n);
+  }
+  for (std::size_t k = 0; k < runs; ++k) {
+    count[bins_in[run_start[k]]] += run_start[k + 1] - run_start[k];
+  }
+  count[unknown_bin_] = 0;
   uint32_t acc = 0;
   for (std::size_t b = 0; b <= bins; ++b) {
     const uint32_t c = bin_start_[b + 1];
@@ -738,21 +758,45 @@ void VerticalScanGround::classify(const PointCloudView& view, const SensorPose& 
     acc += c;
   }
   bin_start_[bins + 1] = acc;
-  order_.resize(acc);
+  order_h_.resize(acc);
   order_r_.resize(acc + kMaxRankBin);  // readable floats past the last bin
   {
-    // Scatter; bin_start_[b] advances to the end of bin b, i.e. the start of bin b + 1. Within
-    // a bin the points stay in input order.
-    uint32_t* __restrict order = order_.data();
+    // Move r and height (not the point index: fitColumns() then reads a bin's representative
+    // from the bin's own entries instead of gathering it from r_ and height_ all over the
+    // scan); bin_start_[b] advances to the end of bin b, i.e. the start of bin b + 1. Within a
+    // bin the points stay in input order.
+    float* __restrict order_h = order_h_.data();
     float* __restrict order_r = order_r_.data();
     uint32_t* __restrict start = bin_start_.data();
-    const uint32_t* __restrict bins_in = bin_.data();
     const float* __restrict r_in = r_.data();
-#pragma GCC unroll 4
-    for (std::size_t i = 0; i < n; ++i) {
-      const uint32_t at = start[bins_in[i]]++;
-      order[at] = static_cast<uint32_t>(i);
-      order_r[at] = r_in[i];
+    const float* __restrict h_in = height_.data();
+    for (std::size_t k = 0; k < runs; ++k) {
+      const uint32_t from = run_start[k];
+      const uint32_t len = run_start[k + 1] - from;
+      const uint32_t b = bins_in[from];
+      if (b == unknown_bin_) continue;
+      const uint32_t at = start[b];
+      start[b] = at + len;
+      float* dr = order_r + at;
+      float* dh = order_h + at;
+      const float* sr = r_in + from;
+      const float* sh = h_in + from;
+#if defined(__SSE2__)
+      if (len >= 4) {
+        // Four at a time; the last four overlap the previous ones (same values).
+        for (uint32_t q = 0; q + 4 < len; q += 4) {
+          _mm_storeu_ps(dr + q, _mm_loadu_ps(sr + q));
+          _mm_storeu_ps(dh + q, _mm_loadu_ps(sh + q));
+        }
+        _mm_storeu_ps(dr + len - 4, _mm_loadu_ps(sr + len - 4));
+        _mm_storeu_ps(dh + len - 4, _mm_loadu_ps(sh + len - 4));
+        continue;
+      }
+#endif
+      for (uint32_t q = 0; q < len; ++q) {
+        dr[q] = sr[q];
+        dh[q] = sh[q];
+      }
     }
     for (int k = 0; k < kMaxRankBin; ++k) order_r[acc + k] = 0.f;
     // Shift back: bin b spans [bin_start_[b-1], bin_start_[b]) now; restore starts.
@@ -789,24 +833,26 @@ void VerticalScanGround::fitColumns() {
       const uint32_t end = bin_start_[b + 1];
       if (begin == end) continue;
       const int cnt = static_cast<int>(end - begin);
-      // The lower median by (r, input order) of the bin's points.
+      // The lower median by (r, input order) of the bin's points (their position in the bin
+      // orders like their input index).
       uint32_t rep;
       if (cnt <= kMaxRankBin) {
-        rep = order_[begin + lowerMedianPosition(&order_r_[begin], cnt)];
+        rep = begin + lowerMedianPosition(&order_r_[begin], cnt);
       } else {
-        // Large bins (slow spin, duplicated points): partial selection on (r, index) keys.
+        // Large bins (slow spin, duplicated points): partial selection on (r, position) keys.
         big_bin_.resize(cnt);
         for (int q = 0; q < cnt; ++q) {
-          big_bin_[q] = rangeKey(order_r_[begin + q], order_[begin + q]);
+          big_bin_[q] = rangeKey(order_r_[begin + q], static_cast<uint32_t>(q));
         }
         const int mid = (cnt - 1) / 2;
         std::nth_element(big_bin_.begin(), big_bin_.begin() + mid, big_bin_.end());
-        rep = static_cast<uint32_t>(big_bin_[mid]);
+        rep = begin + static_cast<uint32_t>(big_bin_[mid]);
       }
-      cr[m] = r_[rep];
-      ch[m] = height_[rep];
-      rep_rh[2 * b] = r_[rep];
-      rep_rh[2 * b + 1] = height_[rep];
+      const float rep_r = order_r_[rep], rep_h = order_h_[rep];
+      cr[m] = rep_r;
+      ch[m] = rep_h;
+      rep_rh[2 * b] = rep_r;
+      rep_rh[2 * b + 1] = rep_h;
       ++m;
     }
     insertionSort(cr, ch, m);
