@@ -43,8 +43,29 @@ struct ScanSet {
 void accumulate(const ScanSet& scans, const Eigen::Isometry3d& extrinsic, PointVector* out);
 
 // Replaces the points of each voxel of `voxel` metres by their centroid (which also averages the
-// range noise). Voxels are keyed in the points' own frame.
+// range noise). Voxels are keyed in the points' own frame; the centroids come in the order of
+// each voxel's first point.
 PointVector voxelDownsample(const PointVector& points, double voxel);
+
+// voxelDownsample with reusable storage, for scan-by-scan use: an open-addressing voxel index and
+// the voxel sums keep their capacity from call to call, so a stream of scans thins without
+// allocating once the largest scan has been seen.
+class VoxelThinner {
+ public:
+  // Appends the centroids of `points[0, count)` (non-finite points skipped) to *out.
+  void thin(const Eigen::Vector3f* points, std::size_t count, double voxel, PointVector* out);
+
+ private:
+  struct VoxelSum {
+    Eigen::Vector3d sum;
+    int count;
+  };
+  uint32_t slotOf(int64_t key) const;
+  std::vector<int64_t> keys_;    // per slot; kEmptyKey when free
+  std::vector<uint32_t> index_;  // per slot: the voxel's entry in sums_
+  std::vector<VoxelSum> sums_;
+  uint32_t mask_ = 0;
+};
 // The same per scan, in the sensor frame, so the result does not depend on any hypothesis.
 ScanSet voxelDownsampleScans(const ScanSet& scans, double voxel);
 

@@ -1,7 +1,6 @@
 #include "ladar_perception/calibration/accumulation.h"
 
 #include <cmath>
-#include <unordered_map>
 
 namespace ladar_perception {
 namespace calibration {
@@ -50,10 +49,7 @@ void accumulate(const ScanSet& scans, const Eigen::Isometry3d& extrinsic, PointV
 }
 
 namespace {
-struct VoxelSum {
-  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-  int count = 0;
-};
+constexpr int64_t kEmptyKey = -1;  // voxel keys are >= 0
 
 inline int64_t voxelKey(const Eigen::Vector3f& p, double inv) {
   const int64_t ix = static_cast<int64_t>(std::floor(p.x() * inv)) & 0x1FFFFF;
@@ -61,49 +57,59 @@ inline int64_t voxelKey(const Eigen::Vector3f& p, double inv) {
   const int64_t iz = static_cast<int64_t>(std::floor(p.z() * inv)) & 0x1FFFFF;
   return (ix << 42) | (iy << 21) | iz;
 }
+}  // namespace
 
-void downsampleInto(const Eigen::Vector3f* begin, std::size_t count, double voxel,
-                    std::unordered_map<int64_t, uint32_t>* index, std::vector<VoxelSum>* sums,
-                    PointVector* out) {
-  index->clear();
-  sums->clear();
+uint32_t VoxelThinner::slotOf(int64_t key) const {
+  // Fibonacci hashing of the key, then linear probing.
+  uint32_t slot = static_cast<uint32_t>((static_cast<uint64_t>(key) * 0x9E3779B97F4A7C15ull) >> 32) & mask_;
+  while (keys_[slot] != kEmptyKey && keys_[slot] != key) slot = (slot + 1) & mask_;
+  return slot;
+}
+
+void VoxelThinner::thin(const Eigen::Vector3f* points, std::size_t count, double voxel,
+                        PointVector* out) {
+  std::size_t slots = 16;
+  while (slots < 2 * count) slots *= 2;  // load factor <= 1/2
+  keys_.assign(slots, kEmptyKey);        // keeps the capacity of earlier, larger scans
+  index_.resize(slots);
+  mask_ = static_cast<uint32_t>(slots - 1);
+  sums_.clear();
   const double inv = 1.0 / voxel;
   for (std::size_t i = 0; i < count; ++i) {
-    const Eigen::Vector3f& p = begin[i];
+    const Eigen::Vector3f& p = points[i];
     if (!p.allFinite()) continue;
-    auto it = index->emplace(voxelKey(p, inv), static_cast<uint32_t>(sums->size()));
-    if (it.second) sums->emplace_back();
-    VoxelSum& s = (*sums)[it.first->second];
+    const int64_t key = voxelKey(p, inv);
+    const uint32_t slot = slotOf(key);
+    if (keys_[slot] == kEmptyKey) {
+      keys_[slot] = key;
+      index_[slot] = static_cast<uint32_t>(sums_.size());
+      sums_.push_back({Eigen::Vector3d::Zero(), 0});
+    }
+    VoxelSum& s = sums_[index_[slot]];
     s.sum += p.cast<double>();
     ++s.count;
   }
-  for (const VoxelSum& s : *sums) out->push_back((s.sum / s.count).cast<float>());
+  out->reserve(out->size() + sums_.size());
+  for (const VoxelSum& s : sums_) out->push_back((s.sum / s.count).cast<float>());
 }
-}  // namespace
 
 PointVector voxelDownsample(const PointVector& points, double voxel) {
+  if (!(voxel > 0)) return points;
   PointVector out;
-  if (!(voxel > 0)) {
-    out = points;
-    return out;
-  }
-  std::unordered_map<int64_t, uint32_t> index;
-  std::vector<VoxelSum> sums;
-  index.reserve(points.size() / 4 + 16);
-  downsampleInto(points.data(), points.size(), voxel, &index, &sums, &out);
+  VoxelThinner thinner;
+  thinner.thin(points.data(), points.size(), voxel, &out);
   return out;
 }
 
 ScanSet voxelDownsampleScans(const ScanSet& scans, double voxel) {
   if (!(voxel > 0)) return scans;
   ScanSet out;
-  std::unordered_map<int64_t, uint32_t> index;
-  std::vector<VoxelSum> sums;
+  VoxelThinner thinner;
   PointVector scan;
   for (std::size_t k = 0; k < scans.numScans(); ++k) {
     scan.clear();
-    downsampleInto(scans.points.data() + scans.scan_begin[k],
-                   scans.scan_begin[k + 1] - scans.scan_begin[k], voxel, &index, &sums, &scan);
+    thinner.thin(scans.points.data() + scans.scan_begin[k], scans.scan_begin[k + 1] - scans.scan_begin[k],
+                 voxel, &scan);
     out.addScan(scans.stamps[k], scans.vehicle_poses[k], scan);
   }
   return out;
