@@ -76,6 +76,7 @@ CalibrationRos::CalibrationRos(ros::NodeHandle nh, ros::NodeHandle private_nh)
   base_frame_ = private_nh_.param<std::string>("base_frame", "base_link");
   output_file_ = private_nh_.param<std::string>("output_file", "");
   buffer_size_ = std::max(1, private_nh_.param("buffer_size", 50));
+  buffer_points_ = std::max(1, private_nh_.param("buffer_points", 8000000));
   buffer_voxel_ = private_nh_.param("buffer_voxel", 0.1);
   min_range_ = private_nh_.param("min_range", 0.5);
   max_range_ = private_nh_.param("max_range", 120.0);
@@ -84,6 +85,11 @@ CalibrationRos::CalibrationRos(ros::NodeHandle nh, ros::NodeHandle private_nh)
   sensors_[1].type = private_nh_.param<std::string>("target_type", "PointCloud2");
   sensors_[0].frame = private_nh_.param<std::string>("reference_frame", "");
   sensors_[1].frame = private_nh_.param<std::string>("target_frame", "");
+  for (Sensor& s : sensors_) {
+    s.ring.reset(new cal::ScanRing(static_cast<std::size_t>(buffer_size_),
+                                   static_cast<std::size_t>(4 * buffer_size_),
+                                   static_cast<std::size_t>(buffer_points_)));
+  }
   const std::string method = private_nh_.param<std::string>("method", cal::defaultMethod());
   if (!cal::isMethod(method)) {
     ROS_ERROR_STREAM("Calibration: unknown method '" << method << "' in ~method; requests that "
@@ -144,22 +150,22 @@ CalibrationRos::~CalibrationRos() {
 
 std::size_t CalibrationRos::bufferedScans(bool target) const {
   std::lock_guard<std::mutex> lock(mutex_);
-  return sensors_[target ? 1 : 0].buffer.size();
+  return sensors_[target ? 1 : 0].ring->posedScans();
 }
 
 void CalibrationRos::cloudCallback(const sensor_msgs::PointCloud2ConstPtr& msg, bool target) {
   try {
     const ros::WallTime start = ros::WallTime::now();
-    cal::PointVector points;
+    std::lock_guard<std::mutex> work(work_mutex_);
     std::string error;
     CloudError code = CloudError::kNone;
-    if (!calibrationPoints(*msg, min_range_, max_range_, &points, &error, &code)) {
+    if (!calibrationPoints(*msg, min_range_, max_range_, &work_points_, &error, &code)) {
       health_.error(std::string("unreadable cloud (") + cloudErrorName(code) + ")",
                     std::string(target ? "target" : "reference") + " cloud in frame '" +
                         msg->header.frame_id + "': " + error);
       return;
     }
-    if (enqueue(target, msg->header.frame_id, msg->header.stamp, std::move(points))) {
+    if (enqueue(target, msg->header.frame_id, msg->header.stamp)) {
       health_.processed((ros::WallTime::now() - start).toSec());  // conversion + thinning
     }
   } catch (const std::exception& e) {
@@ -170,14 +176,14 @@ void CalibrationRos::cloudCallback(const sensor_msgs::PointCloud2ConstPtr& msg, 
 void CalibrationRos::scanCallback(const sensor_msgs::LaserScanConstPtr& msg, bool target) {
   try {
     const ros::WallTime start = ros::WallTime::now();
-    cal::PointVector points;
+    std::lock_guard<std::mutex> work(work_mutex_);
     std::string error;
-    if (!calibrationPoints(*msg, &points, &error)) {
+    if (!calibrationPoints(*msg, &work_points_, &error)) {
       health_.error("unreadable scan", std::string(target ? "target" : "reference") +
                                            " scan in frame '" + msg->header.frame_id + "': " + error);
       return;
     }
-    if (enqueue(target, msg->header.frame_id, msg->header.stamp, std::move(points))) {
+    if (enqueue(target, msg->header.frame_id, msg->header.stamp)) {
       health_.processed((ros::WallTime::now() - start).toSec());  // conversion + thinning
     }
   } catch (const std::exception& e) {
@@ -185,26 +191,53 @@ void CalibrationRos::scanCallback(const sensor_msgs::LaserScanConstPtr& msg, boo
   }
 }
 
-bool CalibrationRos::enqueue(bool target, const std::string& frame, const ros::Time& stamp,
-                             cal::PointVector&& points) {
-  if (buffer_voxel_ > 0) points = cal::voxelDownsample(points, buffer_voxel_);
-  std::lock_guard<std::mutex> lock(mutex_);
+namespace {
+// Largest scan [points] whose conversion and thinning storage is kept for the next scan; a
+// larger one (a 2-million-point cloud) is processed and its storage released.
+constexpr std::size_t kRetainedWorkPoints = 1 << 19;
+}  // namespace
+
+bool CalibrationRos::enqueue(bool target, const std::string& frame, const ros::Time& stamp) {
   Sensor& s = sensors_[target ? 1 : 0];
-  if (s.frame.empty()) s.frame = frame;
-  if (frame != s.frame) {
-    health_.error("unexpected frame", std::string(target ? "target" : "reference") +
-                                          " message in frame '" + frame + "', expected '" +
-                                          s.frame + "'; ignored");
+  const char* role = target ? "target" : "reference";
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (s.frame.empty()) s.frame = frame;
+    if (frame != s.frame) {
+      health_.error("unexpected frame", std::string(role) + " message in frame '" + frame +
+                                            "', expected '" + s.frame + "'; ignored");
+      return false;
+    }
+  }
+  thinned_.clear();
+  if (buffer_voxel_ > 0) {
+    thinner_.thin(work_points_.data(), work_points_.size(), buffer_voxel_, &thinned_);
+  } else {
+    thinned_.assign(work_points_.begin(), work_points_.end());
+  }
+  cal::ScanRing::PushOutcome outcome;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    outcome = s.ring->push(static_cast<int64_t>(stamp.toNSec()), thinned_.data(), thinned_.size());
+  }
+  const std::size_t thinned = thinned_.size();
+  if (work_points_.capacity() > kRetainedWorkPoints || thinned_.capacity() > kRetainedWorkPoints) {
+    cal::PointVector().swap(work_points_);
+    cal::PointVector().swap(thinned_);
+    thinner_ = cal::VoxelThinner();
+  }
+  if (!outcome.stored) {
+    health_.error("scan too large", std::string(role) + " scan of " + std::to_string(thinned) +
+                                        " points after thinning; the buffer holds " +
+                                        std::to_string(buffer_points_) + " (~buffer_points)");
     return false;
   }
-  s.pending.push_back({stamp, std::move(points)});
-  while (s.pending.size() > static_cast<std::size_t>(4 * buffer_size_)) {
-    s.pending.pop_front();
+  if (outcome.dropped_waiting > 0) {
     uint64_t suppressed = 0;
     if (health_.dropped("pending queue full", &suppressed)) {
-      ROS_WARN_STREAM("Calibration: more than " << 4 * buffer_size_ << " "
-                      << (target ? "target" : "reference") << " scans wait for their vehicle "
-                      "pose; oldest dropped (" << suppressed << " more since the last message)");
+      ROS_WARN_STREAM("Calibration: " << role << " scans wait for their vehicle pose beyond the "
+                      "buffer's room; oldest dropped (" << suppressed << " more since the last "
+                      "message)");
     }
   }
   return true;
@@ -216,29 +249,24 @@ void CalibrationRos::drainPending(const ros::TimerEvent&) {
     const ros::Time now = ros::Time::now();
     for (int k = 0; k < 2; ++k) {
       Sensor& s = sensors_[k];
-      while (!s.pending.empty()) {
-        PendingScan& p = s.pending.front();
+      int64_t stamp_ns = 0;
+      while (s.ring->oldestWaiting(&stamp_ns)) {
+        ros::Time stamp;
+        stamp.fromNSec(static_cast<uint64_t>(stamp_ns));
         std::string why;
-        if (tf_buffer_.canTransform(odom_frame_, base_frame_, p.stamp, &why)) {
-          const geometry_msgs::TransformStamped t =
-              tf_buffer_.lookupTransform(odom_frame_, base_frame_, p.stamp);
-          BufferedScan b;
-          b.stamp = p.stamp.toSec();
-          b.vehicle_pose = tf2::transformToEigen(t);
-          b.points = std::move(p.points);
-          s.pending.pop_front();
-          s.buffer.push_back(std::move(b));
-          while (s.buffer.size() > static_cast<std::size_t>(buffer_size_)) s.buffer.pop_front();
+        if (tf_buffer_.canTransform(odom_frame_, base_frame_, stamp, &why)) {
+          s.ring->resolvePose(
+              tf2::transformToEigen(tf_buffer_.lookupTransform(odom_frame_, base_frame_, stamp)));
           continue;
         }
         // Waited too long, or stamped far ahead of the clock (a bag that looped back in time:
         // tf has cleared its buffer and that pose will not come).
-        if ((now - p.stamp).toSec() > tf_wait_ || (p.stamp - now).toSec() > tf_wait_) {
+        if ((now - stamp).toSec() > tf_wait_ || (stamp - now).toSec() > tf_wait_) {
           health_.tfLookupFailed("no vehicle pose " + odom_frame_ + " -> " +
                                  base_frame_ + " at a " + (k ? "target" : "reference") +
                                  " scan's stamp within " + std::to_string(tf_wait_) +
                                  " s; scan dropped (" + why + ")");
-          s.pending.pop_front();
+          s.ring->dropWaiting();
           continue;
         }
         break;  // stamps are ordered: later scans wait too
@@ -255,8 +283,9 @@ void CalibrationRos::diagnose(diagnostic_updater::DiagnosticStatusWrapper& statu
   for (int k = 0; k < 2; ++k) {
     const std::string role = k ? "target" : "reference";
     status.add(role + " frame", sensors_[k].frame.empty() ? std::string("(none yet)") : sensors_[k].frame);
-    status.add(role + " scans buffered", sensors_[k].buffer.size());
-    status.add(role + " scans waiting for a pose", sensors_[k].pending.size());
+    status.add(role + " scans buffered", sensors_[k].ring->posedScans());
+    status.add(role + " scans waiting for a pose", sensors_[k].ring->waitingScans());
+    status.add(role + " points buffered", sensors_[k].ring->points());
   }
   status.add("calibration running", busy_.load());
   status.add("last result", have_result_ ? (last_result_.success ? "success" : "no success")
@@ -364,7 +393,7 @@ void CalibrationRos::runCalibration(const ladar_perception::Calibrate::Request& 
     target_frame = sensors_[1].frame;
     for (int k = 0; k < 2; ++k) {
       cal::ScanSet& set = k == 0 ? input.reference : input.target;
-      for (const BufferedScan& b : sensors_[k].buffer) set.addScan(b.stamp, b.vehicle_pose, b.points);
+      sensors_[k].ring->appendPosedTo(&set);
     }
   }
   if (input.reference.empty() || input.target.empty()) {
@@ -426,9 +455,8 @@ bool CalibrationRos::resetService(std_srvs::Trigger::Request&, std_srvs::Trigger
   std::lock_guard<std::mutex> lock(mutex_);
   std::size_t n = 0;
   for (Sensor& s : sensors_) {
-    n += s.buffer.size() + s.pending.size();
-    s.buffer.clear();
-    s.pending.clear();
+    n += s.ring->posedScans() + s.ring->waitingScans();
+    s.ring->clear();
   }
   have_result_ = false;
   res.success = true;

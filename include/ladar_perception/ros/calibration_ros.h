@@ -7,14 +7,14 @@
 // ~progress_estimate (geometry_msgs/TransformStamped, the current estimate).
 //
 // The vehicle pose is looked up with canTransform/lookupTransform (no waiting) and scans whose
-// pose is not yet in the tf buffer wait in a small pending queue drained by a timer; a
+// pose is not yet in the tf buffer wait in the scan buffer (calibration::ScanRing) until a timer
+// finds it; a
 // tf2_ros::MessageFilter cannot be used because the target sensor's frame is, by definition, not
 // (correctly) connected to the tree. Bad input is counted and logged per kind through
 // InputHealth and shown on /diagnostics with the buffer fill.
 #pragma once
 
 #include <atomic>
-#include <deque>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -30,6 +30,7 @@
 
 #include "ladar_perception/Calibrate.h"
 #include "ladar_perception/calibration/calibrator.h"
+#include "ladar_perception/calibration/scan_ring.h"
 #include "ladar_perception/ros/adapter_support.h"
 #include "ladar_perception/ros/input_health.h"
 
@@ -53,28 +54,21 @@ class CalibrationRos {
   const InputHealth& health() const { return health_; }
 
  private:
-  struct BufferedScan {
-    double stamp = 0;
-    Eigen::Isometry3d vehicle_pose = Eigen::Isometry3d::Identity();
-    calibration::PointVector points;
-  };
-  struct PendingScan {
-    ros::Time stamp;
-    calibration::PointVector points;
-  };
   struct Sensor {
     std::string type;   // PointCloud2 or LaserScan
     std::string frame;  // from the messages (or the parameter)
-    std::deque<BufferedScan> buffer;
-    std::deque<PendingScan> pending;
+    // The latest scans, thinned, with their vehicle poses once tf has them (bounded; point
+    // storage reserved once: buffering allocates nothing and its memory stops growing).
+    std::unique_ptr<calibration::ScanRing> ring;
     ros::Subscriber subscriber;
   };
 
   void cloudCallback(const sensor_msgs::PointCloud2ConstPtr& msg, bool target);
   void scanCallback(const sensor_msgs::LaserScanConstPtr& msg, bool target);
-  // False when the message was ignored (not the sensor's frame).
-  bool enqueue(bool target, const std::string& frame, const ros::Time& stamp,
-               calibration::PointVector&& points);
+  // Thins work_points_ and buffers the scan to wait for its vehicle pose; false when the message
+  // was ignored (not the sensor's frame, or more points than the buffer holds). Called with
+  // work_mutex_ held.
+  bool enqueue(bool target, const std::string& frame, const ros::Time& stamp);
   void drainPending(const ros::TimerEvent&);
   bool calibrateService(ladar_perception::Calibrate::Request& req,
                         ladar_perception::Calibrate::Response& res);
@@ -102,7 +96,13 @@ class CalibrationRos {
   // Parameters.
   std::string odom_frame_, base_frame_, output_file_;
   int buffer_size_ = 50;
+  int buffer_points_ = 8000000;
   double buffer_voxel_ = 0.1, min_range_ = 0.5, max_range_ = 120.0, tf_wait_ = 2.0;
+
+  // Conversion and thinning workspace, kept from scan to scan (no per-scan allocation).
+  std::mutex work_mutex_;
+  calibration::PointVector work_points_, thinned_;
+  calibration::VoxelThinner thinner_;
 
   mutable std::mutex mutex_;  // sensors_, last result
   Sensor sensors_[2];         // 0 reference, 1 target
