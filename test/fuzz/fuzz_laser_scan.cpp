@@ -10,6 +10,7 @@
 
 #include "ladar_perception/cloud/laser_scan.h"
 #include "ladar_perception/ground/hough_ground.h"
+#include "fuzz_reader.h"
 
 #ifndef LADAR_FUZZ_ENTRY
 #define LADAR_FUZZ_ENTRY LLVMFuzzerTestOneInput
@@ -17,20 +18,7 @@
 
 namespace fuzz_laser_scan {
 using namespace ladar_perception;
-
-struct Reader {
-  const uint8_t* p;
-  size_t n;
-  template <typename T>
-  T get() {
-    T v{};
-    const size_t k = n < sizeof(T) ? n : sizeof(T);
-    std::memcpy(&v, p, k);
-    p += k;
-    n -= k;
-    return v;
-  }
-};
+using ladar_perception::fuzz::Reader;
 }  // namespace fuzz_laser_scan
 
 extern "C" int LADAR_FUZZ_ENTRY(const uint8_t* data, size_t size) {

@@ -10,6 +10,7 @@
 
 #include "ladar_perception/cloud/point_cloud_view.h"
 #include "ladar_perception/ground/ground_model.h"
+#include "fuzz_reader.h"
 
 #ifndef LADAR_FUZZ_ENTRY
 #define LADAR_FUZZ_ENTRY LLVMFuzzerTestOneInput
@@ -17,21 +18,7 @@
 
 namespace fuzz_point_cloud {
 using namespace ladar_perception;
-
-
-struct Reader {
-  const uint8_t* p;
-  size_t n;
-  template <typename T>
-  T get() {
-    T v{};
-    const size_t k = n < sizeof(T) ? n : sizeof(T);
-    std::memcpy(&v, p, k);
-    p += k;
-    n -= k;
-    return v;
-  }
-};
+using ladar_perception::fuzz::Reader;
 
 const char* const kNames[] = {"x", "y", "z", "intensity", "ring", "time", "channel", "t"};
 

@@ -43,7 +43,9 @@ int replay(const std::string& target, Entry entry, bool need_regressions) {
   const std::string root = std::string(LADAR_SOURCE_DIR) + "/test/fuzz/";
   std::vector<std::string> files = filesIn(root + "corpus/" + target);
   const std::vector<std::string> regressions = filesIn(root + "regressions/" + target);
-  if (need_regressions) EXPECT_FALSE(regressions.empty()) << target;
+  if (need_regressions) {
+    EXPECT_FALSE(regressions.empty()) << target;
+  }
   files.insert(files.end(), regressions.begin(), regressions.end());
   for (const std::string& f : files) {
     std::ifstream in(f, std::ios::binary);
