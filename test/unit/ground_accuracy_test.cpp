@@ -47,12 +47,15 @@ INSTANTIATE_TEST_SUITE_P(
     ::testing::Values(
         // Targets met.
         Expectation{"flat", 0.99, 0.99, 0.97},
-        // Ground targets met; obstacle recall (poles, the parked car) measured 94.5 %.
+        // Ground targets met; obstacle recall (poles, the parked car) measured 94.1 %.
         Expectation{"hillside", 0.99, 0.99, 0.94},
-        // Measured 95.8 % / 98.3 % / 93.9 %.
-        Expectation{"urban", 0.955, 0.98, 0.935},
-        // Ground targets met; pothole recall measured 56.7 % (3 scans; 60.4 % over 10).
-        Expectation{"potholes", 0.99, 0.99, 0.56}),
+        // Ground recall target met; measured 96.1 % / 99.0 % / 94.3 % (curb faces and the
+        // lowest parts of cars and walls lie within 2 cm of the road).
+        Expectation{"urban", 0.96, 0.99, 0.94},
+        // Ground targets met; pothole recall measured 48.1 % on these 3 scans (60.3 % over
+        // 10; 56.7 % on these 3 with 1 m knots, which left the road in front of curbs and cars
+        // below the line). A fifth of the pothole returns lie within 3 cm of the road plane.
+        Expectation{"potholes", 0.99, 0.99, 0.475}),
     [](const ::testing::TestParamInfo<Expectation>& info) { return std::string(info.param.world); });
 
 TEST(GroundAccuracy, DefaultBeatsThesisOnObstaclesAndKeepsTheGround) {

@@ -42,9 +42,9 @@ struct VerticalScanParams {
   // from the ground so far and the local slope to the last ground return is passable), so the
   // line bends where the terrain's slope changes and steps up a curb onto the sidewalk.
   bool bend_ground_line = true;
-  float segment_length = 1.0f;            // knot spacing of the piecewise ground line [m]
+  float segment_length = 0.75f;           // knot spacing of the piecewise ground line [m]
   float track_max_step = 0.12f;           // highest return above the extrapolated ground [m]
-  float track_max_drop = 0.03f;           // deepest return below it [m]
+  float track_max_drop = 0.02f;           // deepest return below it [m]
   float track_tolerance_per_m = 0.05f;    // both grow by this per metre of gap [m/m]
   float track_max_local_slope = 1.0f;     // steepest rise from the last ground return
   float track_min_local_slope = -0.4f;    // steepest fall from the last ground return
@@ -161,7 +161,10 @@ struct GroundLine {
 // ground when (a) its residual to the extrapolation lies in [-(track_max_drop + g dr),
 // track_max_step + g dr] (dr = gap to the last ground return, g = track_tolerance_per_m) and
 // (b) its slope from the last ground return lies in [track_min_local_slope,
-// track_max_local_slope]. The accepted polyline is sampled at the knots (extrapolated beyond
+// track_max_local_slope]. Until the first return is accepted the line is only the straight
+// estimate from the sensor's ground point, and the lower bound is -(track_max_step + g dr).
+// (VerticalScanGround seeds it with the straight estimate over the representatives off
+// vertical surfaces.) The accepted polyline is sampled at the knots (extrapolated beyond
 // the last ground return); knot_support gets 1 / (1 + distance to the nearest ground return).
 // `scratch` holds at least 2 * (n + 1) floats. Returns the number of accepted returns.
 int trackGroundLine(const float* r, const float* height, int n, const VerticalScanParams& p,

@@ -150,6 +150,7 @@ VerticalScanParams verticalScanThesisParams() {
   p.ground_slope_max = 0.35f;
   p.tolerances = ObstacleToleranceParams();
   p.bend_ground_line = false;
+  p.segment_length = 1.f;  // the straight line's second knot (no bending)
   p.couple_columns = false;
   // Eq 3.15 as the thesis writes it takes |GndError|: returns below the line score too.
   p.negative_obstacles = true;
@@ -169,7 +170,9 @@ VerticalScanParams verticalScanDefaultParams() {
   p.tolerances.slope_error_max_per_m = 0.f;
   p.tolerances.obstacle_threshold = 0.5f;
   p.negative_gnd_error_max = 0.05f;
-  p.track_max_drop = 0.03f;
+  // 2 cm (3 before): with 0.75 m knots the line otherwise follows the shallow edge of a pothole
+  // down more often (10 scans: pothole recall 58.8 -> 60.3 %).
+  p.track_max_drop = 0.02f;
   // A step of up to 12 cm (+ 5 cm per metre of gap) continues the ground: a 15 cm curb seen
   // across the gutter still steps up, but the bottom edge of a car or wall (the commonest
   // urban miss with 0.2) mostly no longer does (0.1 finds still more urban obstacles but
@@ -177,6 +180,12 @@ VerticalScanParams verticalScanDefaultParams() {
   p.track_max_step = 0.12f;
   p.track_tolerance_per_m = 0.05f;
   p.track_recover_distance = 0.8f;
+  // Knots every 0.75 m (1 m before): a step the line climbs (a curb, the bottom edge of a car)
+  // is interpolated over one segment, and with 1 m segments the road up to a metre in front of
+  // it lay several cm below the line and became a negative obstacle (urban ground recall 98.6
+  // -> 99.1 %, rural 97.9 -> 98.6 %; 0.5 m gains a little more but costs 0.7 M instructions per
+  // KITTI scan and pothole recall).
+  p.segment_length = 0.75f;
   // The vertical-surface term saturates earlier: 4 cm above the line on a local slope of 0.3.
   p.vertical_gnd_error_max = 0.04f;
   p.vertical_slope_max = 0.3f;
@@ -306,7 +315,13 @@ int trackGroundLine(const float* r, const float* height, int n, const VerticalSc
     const float dh = height[i] - gh[m - 1];
     const float grow = p.track_tolerance_per_m * (dr > 0.f ? dr : 0.f);
     const float res = dh - slope * dr;
-    if (res < -(p.track_max_drop + grow)) {
+    // Before the first ground return the extrapolation is the straight estimate from the
+    // sensor's ground point, which the lower half of a near vertical surface (a parked car's
+    // side, below eq 3.5's mean height) tilts upward: the road in front of it may then lie
+    // well below the line. Until a return is accepted, the line is trusted no more below than
+    // above (track_max_step); after that the drop tolerance applies.
+    const float drop = m == 1 ? std::max(p.track_max_drop, p.track_max_step) : p.track_max_drop;
+    if (res < -(drop + grow)) {
       // Below the line: remember a run of mutually consistent returns.
       if (below_last >= 0 &&
           std::fabs(height[i] - height[below_last]) <
@@ -812,7 +827,7 @@ void VerticalScanGround::fitColumns() {
   const int rows = rows_;
   col_r_.resize(static_cast<std::size_t>(columns_) * rows);
   col_h_.resize(col_r_.size());
-  col_w_.resize(2 * (static_cast<std::size_t>(rows) + 1));
+  col_w_.resize(4 * (static_cast<std::size_t>(rows) + 1));
   // (r, height) pairs per bin after a sentinel pair for bin -1, and one for bin `bins` after
   // them; r = -1 marks an empty bin.
   rep_.assign(2 * (static_cast<std::size_t>(columns_) * rows + 2), -1.f);
@@ -858,8 +873,30 @@ void VerticalScanGround::fitColumns() {
     insertionSort(cr, ch, m);
     col_count[c] = m;
     int support = 0;
-    column_slope_[c] =
-        vertical_scan::estimateSlope(cr, ch, m, p, 0.f, col_w_.data(), &support);
+    if (p.bend_ground_line) {
+      // The seed of the bent line: the straight estimate over the returns off vertical
+      // surfaces. The lower half of a parked car's side or a person a few metres away lies
+      // below eq 3.5's mean height and would tilt the estimate upward, so that the road in
+      // front of it falls below the extrapolated line and the obstacle's lower part is
+      // tracked as ground. A representative is on a vertical surface when the height step to
+      // its neighbour in r on either side exceeds track_max_step + ground_slope_max * dr.
+      float* vr = col_w_.data() + 2 * (rows + 1);
+      float* vh = vr + (rows + 1);
+      int mv = 0;
+      for (int q = 0; q < m; ++q) {
+        const bool steep_before =
+            q > 0 && std::fabs(ch[q] - ch[q - 1]) > p.track_max_step + p.ground_slope_max * (cr[q] - cr[q - 1]);
+        const bool steep_after =
+            q + 1 < m && std::fabs(ch[q + 1] - ch[q]) > p.track_max_step + p.ground_slope_max * (cr[q + 1] - cr[q]);
+        if (steep_before || steep_after) continue;
+        vr[mv] = cr[q];
+        vh[mv] = ch[q];
+        ++mv;
+      }
+      column_slope_[c] = vertical_scan::estimateSlope(vr, vh, mv, p, 0.f, col_w_.data(), &support);
+    } else {
+      column_slope_[c] = vertical_scan::estimateSlope(cr, ch, m, p, 0.f, col_w_.data(), &support);
+    }
     col_n[c] = support;
   }
 
