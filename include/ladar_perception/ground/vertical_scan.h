@@ -212,7 +212,8 @@ class VerticalScanGround : public GroundModel {
   // Introspection of the last scan (tests, visualisation).
   int columns() const { return columns_; }
   int knotsPerColumn() const { return knots_; }
-  // Ground height under the column `col` at horizontal distance r, in the ground frame.
+  // Ground height under the column `col` at horizontal distance r, in the ground frame
+  // (beyond the scan's farthest return: its last segment extended).
   float groundHeight(int col, float r) const;
   int columnOf(float x, float y) const;
 
@@ -230,7 +231,8 @@ class VerticalScanGround : public GroundModel {
   int columns_ = 0;
   int rows_ = 0;       // rows per column in the bin grid (a power of two)
   int row_shift_ = 0;  // log2(rows_)
-  int knots_ = 0;      // knots per column's ground line
+  int knots_ = 0;      // knots per column's ground line (the stride of knot_height_)
+  int knots_used_ = 0;  // of which the last scan filled (out to its farthest return)
   float inv_column_width_ = 0.f;  // columns per radian
   float inv_segment_ = 0.f;
 

@@ -462,6 +462,7 @@ void VerticalScanGround::setParams(const VerticalScanParams& params) {
   } else {
     knots_ = 2;  // a straight line: knot 1 at r = segment_length, extrapolated beyond
   }
+  knots_used_ = knots_;
   knot_height_.assign(static_cast<std::size_t>(columns_) * knots_, 0.f);
   knot_support_.assign(knot_height_.size(), 0.f);
   coupled_.assign(knot_height_.size(), 0.f);
@@ -488,7 +489,7 @@ int VerticalScanGround::columnOf(float x, float y) const {
 }
 
 float VerticalScanGround::groundHeight(int col, float r) const {
-  vertical_scan::GroundLine line{&knot_height_[static_cast<std::size_t>(col) * knots_], knots_,
+  vertical_scan::GroundLine line{&knot_height_[static_cast<std::size_t>(col) * knots_], knots_used_,
                                  inv_segment_};
   return line.heightAt(r);
 }
@@ -710,7 +711,8 @@ void VerticalScanGround::classify(const PointCloudView& view, const SensorPose& 
   bin_start_.resize(bins + 2);
   zeroFill(bin_start_.data(), bins + 2);
   if (n == 0) {
-    // fitColumns() writes every knot; an empty scan leaves flat ground lines.
+    // fitColumns() writes the knots; an empty scan leaves flat ground lines.
+    knots_used_ = knots_;
     std::fill(knot_height_.begin(), knot_height_.end(), 0.f);
     std::fill(knot_support_.begin(), knot_support_.end(), 0.f);
     return;
@@ -785,6 +787,11 @@ void VerticalScanGround::classify(const PointCloudView& view, const SensorPose& 
     uint32_t* __restrict start = bin_start_.data();
     const float* __restrict r_in = r_.data();
     const float* __restrict h_in = height_.data();
+    // The farthest valid return on the way: the ground lines are only needed out to it.
+    float r_max = 0.f;
+#if defined(__SSE2__)
+    __m128 v_r_max = _mm_setzero_ps();
+#endif
     for (std::size_t k = 0; k < runs; ++k) {
       const uint32_t from = run_start[k];
       const uint32_t len = run_start[k + 1] - from;
@@ -800,10 +807,14 @@ void VerticalScanGround::classify(const PointCloudView& view, const SensorPose& 
       if (len >= 4) {
         // Four at a time; the last four overlap the previous ones (same values).
         for (uint32_t q = 0; q + 4 < len; q += 4) {
-          _mm_storeu_ps(dr + q, _mm_loadu_ps(sr + q));
+          const __m128 rq = _mm_loadu_ps(sr + q);
+          v_r_max = _mm_max_ps(v_r_max, rq);
+          _mm_storeu_ps(dr + q, rq);
           _mm_storeu_ps(dh + q, _mm_loadu_ps(sh + q));
         }
-        _mm_storeu_ps(dr + len - 4, _mm_loadu_ps(sr + len - 4));
+        const __m128 r_last = _mm_loadu_ps(sr + len - 4);
+        v_r_max = _mm_max_ps(v_r_max, r_last);
+        _mm_storeu_ps(dr + len - 4, r_last);
         _mm_storeu_ps(dh + len - 4, _mm_loadu_ps(sh + len - 4));
         continue;
       }
@@ -811,7 +822,21 @@ void VerticalScanGround::classify(const PointCloudView& view, const SensorPose& 
       for (uint32_t q = 0; q < len; ++q) {
         dr[q] = sr[q];
         dh[q] = sh[q];
+        r_max = sr[q] > r_max ? sr[q] : r_max;
       }
+    }
+#if defined(__SSE2__)
+    {
+      alignas(16) float m4[4];
+      _mm_store_ps(m4, v_r_max);
+      for (float m : m4) r_max = m > r_max ? m : r_max;
+    }
+#endif
+    // Knot k + 1 is the farthest labelPoints() reads for r <= r_max (k = floor(r / L)).
+    knots_used_ = knots_;
+    const float reach = r_max * inv_segment_;
+    if (reach < static_cast<float>(knots_)) {
+      knots_used_ = std::min(knots_, std::max(2, static_cast<int>(reach) + 2));
     }
     for (int k = 0; k < kMaxRankBin; ++k) order_r[acc + k] = 0.f;
     // Shift back: bin b spans [bin_start_[b-1], bin_start_[b]) now; restore starts.
@@ -924,15 +949,17 @@ void VerticalScanGround::fitColumns() {
     for (int c = 0; c < columns_; ++c) column_slope_[c] = coupled_[c];
   }
 
-  // The ground line of each column.
+  // The ground line of each column, out to the scan's farthest return (knots_used_; the knots
+  // beyond are not read).
   const int K = knots_;
+  const int KU = knots_used_;
   for (int c = 0; c < columns_; ++c) {
     float* kh = &knot_height_[static_cast<std::size_t>(c) * K];
     float* ks = &knot_support_[static_cast<std::size_t>(c) * K];
     if (p.bend_ground_line) {
       vertical_scan::trackGroundLine(&col_r_[static_cast<std::size_t>(c) * rows],
                                      &col_h_[static_cast<std::size_t>(c) * rows], col_count[c], p,
-                                     column_slope_[c], K, kh, ks, col_w_.data());
+                                     column_slope_[c], KU, kh, ks, col_w_.data());
     } else {
       kh[0] = 0.f;
       kh[1] = column_slope_[c] * p.segment_length;
@@ -965,7 +992,7 @@ void VerticalScanGround::fitColumns() {
         const float* own_h = &knot_height_[static_cast<std::size_t>(c) * K];
         const float* own_s = &knot_support_[static_cast<std::size_t>(c) * K];
         const __m128 v_keep = _mm_set1_ps(0.66f), v_eps = _mm_set1_ps(1e-3f);
-        for (; k + 4 <= K; k += 4) {
+        for (; k + 4 <= KU; k += 4) {
           __m128 sw = _mm_setzero_ps(), swh = _mm_setzero_ps();
           for (int j = 0; j <= 2 * RR; ++j) {
             const __m128 w = _mm_mul_ps(_mm_add_ps(_mm_loadu_ps(nb_support[j] + k), v_eps),
@@ -980,7 +1007,7 @@ void VerticalScanGround::fitColumns() {
         }
       }
 #endif
-      for (; k < K; ++k) {
+      for (; k < KU; ++k) {
         // A knot within half a metre of the column's own ground return keeps its height.
         const std::size_t own = static_cast<std::size_t>(c) * K + k;
         if (knot_support_[own] >= 0.66f) {
