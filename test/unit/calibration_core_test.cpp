@@ -273,9 +273,26 @@ TEST(CalibrationCalibrator, DefaultMethodOnHills) {
   for (int i = 0; i < 3; ++i) EXPECT_LT(std::abs(err[i]), 0.03) << cal::dofName(i);
   for (int i = 3; i < 6; ++i) EXPECT_LT(std::abs(err[i]), 0.005) << cal::dofName(i);
   EXPECT_TRUE(r.unobservable.empty());
+  EXPECT_EQ(r.restarts, 0);
   for (int i = 0; i < 6; ++i) EXPECT_TRUE(std::isfinite(r.stddev[i]));
   const cal::Pose6 rep = cal::repeatability(in, p, r.extrinsic, 2);
   EXPECT_LT(rep.head<3>().maxCoeff(), 0.05);
+}
+
+TEST(CalibrationCalibrator, ASolutionOutsideTheSearchRegionRestartsTheCoarseSearch) {
+  // The truth lies 0.6 m from the guess, the region allows 1.5 x 0.1 m: every attempt's
+  // refinement leaves the region; the coarse search is started again coarse_restarts times, then
+  // the failure is reported, not a solution.
+  const cal::CalibrationInput in = makeInput(hills, kReference, kTarget, 4, 0.02, 5);
+  cal::CalibrationParams p;
+  p.initial = kTarget + cal::makePose(0.6, 0.0, 0.0, 0.0, 0.0, 0.0);
+  p.spread << 0.1, 0.1, 0.1, 0.02, 0.02, 0.02;
+  p.coarse_restarts = 2;
+  const cal::CalibrationResult r = cal::calibrate(in, p);
+  EXPECT_FALSE(r.success);
+  EXPECT_EQ(r.restarts, 2);
+  EXPECT_NE(r.message.find("search region"), std::string::npos) << r.message;
+  EXPECT_GT(r.cpu_time, 0.0);
 }
 
 TEST(CalibrationCalibrator, DegenerateScenesAreReportedByName) {

@@ -65,6 +65,10 @@ struct CalibrationParams {
   // The coarse stage of the default method stops once its spread is below this.
   Pose6 coarse_min_spread = (Pose6() << 0.08, 0.08, 0.08, 0.015, 0.015, 0.015).finished();
   int coarse_max_iterations = 25;
+  // Default method: a solution that leaves the search region (the coarse search settled in a
+  // wrong basin, e.g. a 2D ladar's scan plane laid flat over the ground) is searched again from
+  // the start with the coarse search's next seed, at most this many times.
+  int coarse_restarts = 2;
   // 2D ladar targets (fewer than sparse_scan_points per scan), default method: after the coarse
   // search, the mount rotated about its scan plane's ground line (scan_plane.h) by
   // -plane_sweep_range..+plane_sweep_range in plane_sweep_steps values (those inside the search
@@ -99,6 +103,7 @@ struct CalibrationResult {
   double cpu_time = 0;              // seconds of this thread's CPU (the one-core figure)
   std::string method;
   long evaluations = 0;
+  int restarts = 0;                 // coarse searches started again (coarse_restarts)
   std::vector<Pose6> trace;         // the estimate after each iteration of every stage
   // The ground-line sweep of a 2D target: (rotation [rad], cost after the short refinement).
   std::vector<std::pair<double, double>> plane_sweep;

@@ -404,6 +404,16 @@ CalibrationResult calibrate(const CalibrationInput& input, const CalibrationPara
         << out.final_cost;
   }
   out.message = msg.str();
+  if (outside && !cancelled && params.method == "coarse_to_fine" && params.coarse_restarts > 0) {
+    // The coarse search is stochastic: another draw of its particles may find the right basin.
+    CalibrationParams again = params;
+    again.coarse_restarts = params.coarse_restarts - 1;
+    again.search.seed = params.search.seed + 1;
+    CalibrationResult retry = calibrate(input, again, progress);
+    retry.evaluations += out.evaluations;
+    retry.restarts += 1;
+    return finish(retry);
+  }
   finish(out);
   if (!out.message.empty() && out.success) {
     std::ostringstream t;
