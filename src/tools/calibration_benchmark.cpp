@@ -341,10 +341,11 @@ int main(int argc, char** argv) {
     for (const cal::Pose6& p : r.trace) trace.push_back(cal::poseDifference(p, trial.truth));
     traces.push_back(trace);
     if (!quiet) {
-      std::printf("trial %2d: %s %.2f s (cpu %.2f s), %ld evaluations, error x %+.4f y %+.4f z %+.4f m, "
+      std::printf("trial %2d: %s %.2f s (cpu %.2f s), %ld evaluations%s, error x %+.4f y %+.4f z %+.4f m, "
                   "roll %+.5f pitch %+.5f yaw %+.5f rad; %s\n",
-                  t, r.success ? "ok  " : "FAIL", r.elapsed, r.cpu_time, r.evaluations, err[0], err[1], err[2],
-                  err[3], err[4], err[5], r.message.c_str());
+                  t, r.success ? "ok  " : "FAIL", r.elapsed, r.cpu_time, r.evaluations,
+                  r.restarts > 0 ? (", " + std::to_string(r.restarts) + " coarse restarts").c_str() : "",
+                  err[0], err[1], err[2], err[3], err[4], err[5], r.message.c_str());
       const cal::Pose6 curv = r.observability.curvature / std::max(1e-300, r.observability.curvature.maxCoeff());
       std::printf("          cost curvature along the Hessian's eigenvectors (relative): %.2g %.2g %.2g %.2g %.2g %.2g\n",
                   curv[0], curv[1], curv[2], curv[3], curv[4], curv[5]);
