@@ -85,14 +85,7 @@ HoughGroundRos::HoughGroundRos(ros::NodeHandle nh, ros::NodeHandle private_nh)
       private_nh_.param("expected_rate_max", 100.0),
       [this](diagnostic_updater::DiagnosticStatusWrapper& s) { diagnose(s); }));
 
-  method_reconfigure_.reset(new MethodReconfigure<HoughGroundConfig>(private_nh_, loadHoughMethodSettings));
-  reconfigure_server_.reset(new dynamic_reconfigure::Server<HoughGroundConfig>(private_nh_));
-  reconfigure_server_->setCallback([this](HoughGroundConfig& config, uint32_t) {
-    std::lock_guard<std::mutex> lock(config_mutex_);
-    method_reconfigure_->apply(config);
-    config_ = config;
-    config_changed_ = true;
-  });
+  reconfigure_.reset(new MethodReconfigure<HoughGroundConfig>(private_nh_, loadHoughMethodSettings));
 
   // Subscribe last.
   input_.reset(new SensorInput<sensor_msgs::LaserScan>(
@@ -130,13 +123,10 @@ void HoughGroundRos::process(const sensor_msgs::LaserScanConstPtr& msg) {
   last_input_.store(msg.get());
   diagnostics_->tick();
   std::lock_guard<std::mutex> process_lock(process_mutex_);
-  {
-    std::lock_guard<std::mutex> lock(config_mutex_);
-    if (config_changed_) {
-      hough_.setParams(toHoughGroundParams(config_));
-      sensor_height_ = static_cast<float>(config_.sensor_height);
-      config_changed_ = false;
-    }
+  HoughGroundConfig config;
+  if (reconfigure_->takeChanged(&config)) {
+    hough_.setParams(toHoughGroundParams(config));
+    sensor_height_ = static_cast<float>(config.sensor_height);
   }
   LaserScanView scan;
   scan.angle_min = msg->angle_min;
@@ -280,10 +270,7 @@ void HoughGroundRos::publishLine(const sensor_msgs::LaserScan& msg, const ScanGr
 
 void HoughGroundRos::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) {
   health_.fillDiagnostics(status);
-  {
-    std::lock_guard<std::mutex> lock(config_mutex_);
-    status.add("method", config_.method);
-  }
+  status.add("method", reconfigure_->current().method);
   status.add("ground frame", use_tf_ ? ground_frame_ : std::string("(tf off)"));
   std::lock_guard<std::mutex> lock(fit_mutex_);
   status.add("last fit valid", last_fit_.valid);

@@ -94,14 +94,7 @@ VerticalScanGroundRos::VerticalScanGroundRos(ros::NodeHandle nh, ros::NodeHandle
       private_nh_.param("expected_rate_min", 5.0), private_nh_.param("expected_rate_max", 20.0),
       [this](diagnostic_updater::DiagnosticStatusWrapper& s) { diagnose(s); }));
 
-  method_reconfigure_.reset(new MethodReconfigure<VerticalScanGroundConfig>(private_nh_, loadMethodSettings));
-  reconfigure_server_.reset(new dynamic_reconfigure::Server<VerticalScanGroundConfig>(private_nh_));
-  reconfigure_server_->setCallback([this](VerticalScanGroundConfig& config, uint32_t) {
-    std::lock_guard<std::mutex> lock(config_mutex_);
-    method_reconfigure_->apply(config);
-    config_ = config;
-    config_changed_ = true;
-  });
+  reconfigure_.reset(new MethodReconfigure<VerticalScanGroundConfig>(private_nh_, loadMethodSettings));
 
   // Subscribe last.
   input_.reset(new SensorInput<sensor_msgs::PointCloud2>(
@@ -147,13 +140,12 @@ void VerticalScanGroundRos::process(const sensor_msgs::PointCloud2ConstPtr& msg)
   last_input_.store(msg.get());
   diagnostics_->tick();
   std::lock_guard<std::mutex> process_lock(process_mutex_);
-  {
-    std::lock_guard<std::mutex> lock(config_mutex_);
-    if (config_changed_ || !model_) {
-      model_ = makeModel(config_);
-      sensor_height_ = static_cast<float>(config_.sensor_height);
-      config_changed_ = false;
-    }
+  VerticalScanGroundConfig config;
+  const bool changed = reconfigure_->takeChanged(&config);
+  if (changed || !model_) {
+    if (!changed) config = reconfigure_->current();
+    model_ = makeModel(config);
+    sensor_height_ = static_cast<float>(config.sensor_height);
   }
   CloudLayout layout;
   PointCloudView view;
@@ -191,8 +183,7 @@ void VerticalScanGroundRos::process(const sensor_msgs::PointCloud2ConstPtr& msg)
 
 void VerticalScanGroundRos::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) {
   health_.fillDiagnostics(status);
-  std::lock_guard<std::mutex> lock(config_mutex_);
-  status.add("method", config_.method);
+  status.add("method", reconfigure_->current().method);
   status.add("ground frame", use_tf_ ? ground_frame_ : std::string("(tf off)"));
 }
 

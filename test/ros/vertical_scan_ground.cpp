@@ -9,6 +9,7 @@
 #include <thread>
 
 #include <diagnostic_msgs/DiagnosticArray.h>
+#include <dynamic_reconfigure/Reconfigure.h>
 #include <geometry_msgs/TransformStamped.h>
 #include <nodelet/loader.h>
 #include <ros/ros.h>
@@ -16,6 +17,7 @@
 #include <tf2_ros/static_transform_broadcaster.h>
 
 #include "ladar_perception/cloud/point_cloud_view.h"
+#include "ladar_perception/ground/vertical_scan.h"
 #include "ladar_perception/ros/cloud_conversion.h"
 #include "ladar_perception/ros/vertical_scan_ground_ros.h"
 #include "rostest_support.h"
@@ -328,6 +330,70 @@ TEST_F(VerticalScanGroundTest, BadCloudsAreRejectedAndValidOnesStillProcessed) {
   for (std::size_t i = 0; i < view.size(); i += 7) {
     EXPECT_EQ(label.read<int>(view.pointData(i)), lp::kLabelUnknown) << i;  // NaN returns
   }
+}
+
+// dynamic_reconfigure: a threshold given as a parameter at start-up survives the method's
+// settings; a new threshold takes effect on the next scan; choosing another method loads that
+// method's settings into every threshold.
+double reconfigure(const std::string& node, const std::string& name, double value, bool set,
+                   const std::string& method = "") {
+  dynamic_reconfigure::Reconfigure srv;
+  if (set) {
+    dynamic_reconfigure::DoubleParameter p;
+    p.name = name;
+    p.value = value;
+    srv.request.config.doubles.push_back(p);
+  }
+  if (!method.empty()) {
+    dynamic_reconfigure::StrParameter m;
+    m.name = "method";
+    m.value = method;
+    srv.request.config.strs.push_back(m);
+  }
+  EXPECT_TRUE(ros::service::call(node + "/set_parameters", srv));
+  for (const auto& d : srv.response.config.doubles) {
+    if (d.name == name) return d.value;
+  }
+  ADD_FAILURE() << name << " not in the reconfigure response";
+  return NAN;
+}
+
+TEST_F(VerticalScanGroundTest, DynamicReconfigureTakesEffectOnTheNextScan) {
+  ros::NodeHandle nh;
+  const std::string node = "/dyn/vertical_scan_ground";
+  ros::param::set(node + "/gnd_error_max_base", 0.25);  // explicit at start-up
+  nodelet::Loader manager(false);
+  nodelet::M_string remap;
+  remap["points"] = "/dyn/points";
+  remap["obstacles"] = "/dyn/obstacles";
+  remap["classified"] = "/dyn/classified";
+  ASSERT_TRUE(manager.load(node, "ladar_perception/VerticalScanGround", remap, nodelet::V_string()));
+  ASSERT_TRUE(ros::service::waitForService(node + "/set_parameters", 10000));
+  EXPECT_DOUBLE_EQ(reconfigure(node, "gnd_error_max_base", 0, false), 0.25);
+
+  Latest obstacles;
+  ros::Subscriber s = nh.subscribe("/dyn/obstacles", 5, &Latest::callback, &obstacles);
+  ros::Publisher pub = nh.advertise<sensor_msgs::PointCloud2>("/dyn/points", 5);
+  ASSERT_TRUE(waitFor([&] { return pub.getNumSubscribers() > 0 && s.getNumPublishers() > 0; }));
+  const Scene scene = makeScene(lp::velodyneXYZIRTLayout(0));
+  const auto obstaclesOfOneScan = [&]() -> std::size_t {
+    const int before = obstacles.count.load();
+    pub.publish(sensor_msgs::PointCloud2ConstPtr(toMsg(scene.cloud, "velodyne")));
+    if (!waitFor([&] { return obstacles.count.load() > before; })) return 0;
+    const auto m = obstacles.get();
+    return static_cast<std::size_t>(m->width) * m->height;
+  };
+  EXPECT_GT(obstaclesOfOneScan(), 100u);
+  // P(obstacle) never exceeds 1: with that threshold nothing is an obstacle.
+  EXPECT_DOUBLE_EQ(reconfigure(node, "obstacle_threshold", 1.0, true), 1.0);
+  EXPECT_EQ(obstaclesOfOneScan(), 0u);
+  EXPECT_DOUBLE_EQ(reconfigure(node, "obstacle_threshold", 0.5, true), 0.5);
+  EXPECT_GT(obstaclesOfOneScan(), 100u);
+  // Another method: its settings replace every threshold, the explicit one too.
+  const double thesis_base = lp::verticalScanThesisParams().tolerances.gnd_error_max_base;
+  ASSERT_NE(thesis_base, 0.25);
+  EXPECT_NEAR(reconfigure(node, "gnd_error_max_base", 0, false, "thesis"), thesis_base, 1e-6);
+  EXPECT_GT(obstaclesOfOneScan(), 100u);
 }
 
 }  // namespace

@@ -4,18 +4,21 @@
 //    callback guarded so no exception reaches the nodelet manager;
 //  - AdapterDiagnostics: a diagnostic_updater with the input-rate check and the adapter's own
 //    status task, updated at 1 Hz from a timer;
-//  - MethodReconfigure<Config>: dynamic_reconfigure with named methods: at start-up the method's
-//    settings are loaded except the thresholds given explicitly as parameters; choosing another
-//    method later loads that method's settings into every threshold.
+//  - MethodReconfigure<Config>: the dynamic_reconfigure server, with named methods: at start-up
+//    the method's settings are loaded except the thresholds given explicitly as parameters;
+//    choosing another method later loads that method's settings into every threshold; the
+//    processing callback takes the config when it changed.
 #pragma once
 
 #include <algorithm>
 #include <functional>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <vector>
 
 #include <boost/shared_ptr.hpp>
+#include <dynamic_reconfigure/server.h>
 #include <diagnostic_updater/diagnostic_updater.h>
 #include <diagnostic_updater/update_functions.h>
 #include <message_filters/subscriber.h>
@@ -117,16 +120,35 @@ template <typename Config>
 class MethodReconfigure {
  public:
   using LoadSettings = std::function<void(const std::string& method, Config* config)>;
-  // Notes the thresholds given explicitly at start-up (before a dynamic_reconfigure server
-  // writes every parameter to the server).
+  // Notes the thresholds given explicitly at start-up (before the dynamic_reconfigure server
+  // writes every parameter to the parameter server), then starts the server on private_nh.
   MethodReconfigure(ros::NodeHandle private_nh, LoadSettings load)
       : private_nh_(private_nh), load_(std::move(load)) {
     for (const auto& param : Config::__getParamDescriptions__()) {
       if (param->name != "method" && private_nh_.hasParam(param->name)) explicit_.push_back(param->name);
     }
+    server_.reset(new dynamic_reconfigure::Server<Config>(private_nh_));
+    server_->setCallback([this](Config& config, uint32_t) { apply(config); });
   }
-  // Called from the server's callback with the requested config; adjusts it in place.
+  // For the processing callback: when the config changed since the last call (always before
+  // the first call), copies it to *out and returns true.
+  bool takeChanged(Config* out) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (!changed_) return false;
+    *out = config_;
+    changed_ = false;
+    return true;
+  }
+  Config current() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return config_;
+  }
+
+ private:
+  // The server's callback with the requested config; adjusts it in place (what the server then
+  // reports back) and keeps it.
   void apply(Config& config) {
+    std::lock_guard<std::mutex> lock(mutex_);
     if (last_method_.empty()) {
       load_(config.method, &config);
       for (const auto& param : Config::__getParamDescriptions__()) {
@@ -138,13 +160,18 @@ class MethodReconfigure {
       load_(config.method, &config);  // the user tunes from the new method's settings
     }
     last_method_ = config.method;
+    config_ = config;
+    changed_ = true;
   }
 
- private:
   ros::NodeHandle private_nh_;
   LoadSettings load_;
   std::vector<std::string> explicit_;
   std::string last_method_;
+  mutable std::mutex mutex_;
+  Config config_;
+  bool changed_ = false;
+  std::unique_ptr<dynamic_reconfigure::Server<Config>> server_;  // last: stops first
 };
 
 }  // namespace ladar_perception

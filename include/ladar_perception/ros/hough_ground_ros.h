@@ -12,7 +12,6 @@
 #include <string>
 #include <vector>
 
-#include <dynamic_reconfigure/server.h>
 #include <ros/ros.h>
 #include <sensor_msgs/LaserScan.h>
 #include <sensor_msgs/PointCloud2.h>
@@ -58,11 +57,7 @@ class HoughGroundRos {
   ros::Publisher line_pub_;
   ros::Publisher fit_pub_;
 
-  std::mutex config_mutex_;
-  HoughGroundConfig config_;
-  bool config_changed_ = true;
-  std::unique_ptr<MethodReconfigure<HoughGroundConfig>> method_reconfigure_;
-  std::unique_ptr<dynamic_reconfigure::Server<HoughGroundConfig>> reconfigure_server_;
+  std::unique_ptr<MethodReconfigure<HoughGroundConfig>> reconfigure_;
 
   // Touched only by the processing callback (serialised by process_mutex_).
   std::mutex process_mutex_;

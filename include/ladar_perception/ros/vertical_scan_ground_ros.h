@@ -10,7 +10,6 @@
 #include <string>
 #include <vector>
 
-#include <dynamic_reconfigure/server.h>
 #include <ros/ros.h>
 #include <sensor_msgs/PointCloud2.h>
 
@@ -54,11 +53,7 @@ class VerticalScanGroundRos {
   ros::Publisher obstacles_pub_;
   ros::Publisher classified_pub_;
 
-  std::mutex config_mutex_;
-  VerticalScanGroundConfig config_;
-  bool config_changed_ = true;
-  std::unique_ptr<MethodReconfigure<VerticalScanGroundConfig>> method_reconfigure_;
-  std::unique_ptr<dynamic_reconfigure::Server<VerticalScanGroundConfig>> reconfigure_server_;
+  std::unique_ptr<MethodReconfigure<VerticalScanGroundConfig>> reconfigure_;
 
   // Touched only by the processing callback (serialised by process_mutex_).
   std::mutex process_mutex_;
