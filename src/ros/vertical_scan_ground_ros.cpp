@@ -34,6 +34,7 @@ VerticalScanParams toVerticalScanParams(const VerticalScanGroundConfig& c) {
   p.negative_gnd_error_max = static_cast<float>(c.negative_gnd_error_max);
   p.vertical_gnd_error_max = static_cast<float>(c.vertical_gnd_error_max);
   p.vertical_slope_max = static_cast<float>(c.vertical_slope_max);
+  p.vertical_foot_slope = static_cast<float>(c.vertical_foot_slope);
   p.bend_ground_line = c.bend_ground_line;
   p.couple_columns = c.couple_columns;
   p.negative_obstacles = c.negative_obstacles;
@@ -70,6 +71,7 @@ void loadMethodSettings(const std::string& method, VerticalScanGroundConfig* c) 
   c->negative_gnd_error_max = p.negative_gnd_error_max;
   c->vertical_gnd_error_max = p.vertical_gnd_error_max;
   c->vertical_slope_max = p.vertical_slope_max;
+  c->vertical_foot_slope = p.vertical_foot_slope;
   c->bend_ground_line = p.bend_ground_line;
   c->couple_columns = p.couple_columns;
   c->negative_obstacles = p.negative_obstacles;

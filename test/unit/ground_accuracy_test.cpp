@@ -47,15 +47,17 @@ INSTANTIATE_TEST_SUITE_P(
     ::testing::Values(
         // Targets met.
         Expectation{"flat", 0.99, 0.99, 0.97},
-        // Ground targets met; obstacle recall (poles, the parked car) measured 94.1 %.
-        Expectation{"hillside", 0.99, 0.99, 0.94},
-        // Ground recall target met; measured 96.1 % / 99.0 % / 94.3 % (curb faces and the
-        // lowest parts of cars and walls lie within 2 cm of the road).
-        Expectation{"urban", 0.96, 0.99, 0.94},
-        // Ground targets met; pothole recall measured 48.1 % on these 3 scans (60.3 % over
+        // Ground targets met; obstacle recall (poles, the parked car) measured 96.2 % (94.1 %
+        // before the foot-of-a-face term).
+        Expectation{"hillside", 0.99, 0.99, 0.96},
+        // Ground recall target met; measured 97.2 % / 99.0 % / 95.9 % (96.1 / 99.0 / 94.3 %
+        // before the foot-of-a-face term; curb faces and the lowest parts of cars and walls
+        // lie within 2 cm of the road).
+        Expectation{"urban", 0.97, 0.99, 0.955},
+        // Ground targets met; pothole recall measured 51.8 % on these 3 scans (61.2 % over
         // 10; 56.7 % on these 3 with 1 m knots, which left the road in front of curbs and cars
         // below the line). A fifth of the pothole returns lie within 3 cm of the road plane.
-        Expectation{"potholes", 0.99, 0.99, 0.475}),
+        Expectation{"potholes", 0.99, 0.99, 0.51}),
     [](const ::testing::TestParamInfo<Expectation>& info) { return std::string(info.param.world); });
 
 TEST(GroundAccuracy, DefaultBeatsThesisOnObstaclesAndKeepsTheGround) {

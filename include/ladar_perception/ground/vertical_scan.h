@@ -67,6 +67,13 @@ struct VerticalScanParams {
   bool vertical_surfaces = true;
   float vertical_gnd_error_max = 0.04f;   // GndError at which P_vertical's first factor is 1 [m]
   float vertical_slope_max = 0.3f;        // local slope at which its second factor is 1
+  // The foot of a vertical face (a curb's lower half, the bottom of a car's side): the line's
+  // segment across a step smears it, so these returns lie below or barely above the line.
+  // A third term, P_foot = min(height above the foot / vertical_gnd_error_max, 1) *
+  // min(rise / vertical_foot_slope, 1), where the foot is the lower of the line and its knot
+  // before r (the ground in front of the step) and the rise is dHeight / |dr| to the
+  // representative of the laser row above. P = max(P_3.15, P_vertical, P_foot). 0 = off.
+  float vertical_foot_slope = 1.0f;
 };
 
 // Settings by name: "thesis" (the thesis's method and settings) and "default" (beyond it).

@@ -189,6 +189,12 @@ VerticalScanParams verticalScanDefaultParams() {
   // The vertical-surface term saturates earlier: 4 cm above the line on a local slope of 0.3.
   p.vertical_gnd_error_max = 0.04f;
   p.vertical_slope_max = 0.3f;
+  // The foot of a face (a curb's lower half, the bottom of a car's side, which the line's
+  // segment across the step smears over): the row above rising at a slope of 1 or more
+  // (10 scans, urban obstacle recall 94.6 -> 96.1 %, ground precision 96.0 -> 97.1 %; hillside
+  // 95.6 -> 97.1 %; rural 94.2 -> 95.7 %; ground recall within 0.03 %; 0.5 finds more but
+  // costs rural ground recall 1.9 %).
+  p.vertical_foot_slope = 1.0f;
   return p;
 }
 
@@ -1041,6 +1047,8 @@ void VerticalScanGround::labelPoints(GroundClassification* out) {
   const bool vertical = p.vertical_surfaces;
   const float inv_v_gnd = 1.f / std::max(p.vertical_gnd_error_max, 1e-4f);
   const float inv_v_slope = 1.f / std::max(p.vertical_slope_max, 1e-4f);
+  const bool foot = vertical && p.vertical_foot_slope > 0.f;
+  const float inv_foot = foot ? 1.f / p.vertical_foot_slope : 0.f;
   // Eq 3.15's range-growing tolerances; GndErrorMax may differ below the line.
   const float g_above = tol.gnd_error_max_base;
   const float g_below = p.negative_gnd_error_max > 0.f ? p.negative_gnd_error_max : g_above;
@@ -1054,8 +1062,9 @@ void VerticalScanGround::labelPoints(GroundClassification* out) {
   const float* __restrict hh = height_.data();
   uint8_t* __restrict labels = out->labels.data();
   float* __restrict prob = out->p_obstacle.data();
-  // P_vertical of one return (see below), given its GndError factor g and eq 3.15's P.
-  auto vertical_probability = [&](uint32_t b, float r, float h, float g, float prob_i) {
+  // P_vertical of one return (see below), given its GndError factor g, its height-above-the-
+  // foot factor g_foot and eq 3.15's P.
+  auto vertical_probability = [&](uint32_t b, float r, float h, float g, float g_foot, float prob_i) {
     const uint32_t row = b & (rows - 1);
     float local = -1.f;
     const float* lo = rep + 2 * (b - 1);  // the row below
@@ -1070,7 +1079,16 @@ void VerticalScanGround::labelPoints(GroundClassification* out) {
     float v = local * inv_v_slope;
     v = v < 1.f ? v : 1.f;
     const float pv = g * v;
-    return pv > prob_i ? pv : prob_i;
+    float best = pv > prob_i ? pv : prob_i;
+    if (foot && row + 1 < rows && hi[0] >= 0.f) {
+      // The foot of a face: the row above rises from this return at least as steeply as
+      // vertical_foot_slope; scored by the height above the foot.
+      float u = (hi[1] - h) / (std::fabs(r - hi[0]) + 0.02f) * inv_foot;
+      u = u < 1.f ? u : 1.f;
+      const float pf = g_foot * u;
+      best = pf > best ? pf : best;
+    }
+    return best;
   };
   std::size_t i = 0;
 #if defined(__SSE2__)
@@ -1106,6 +1124,7 @@ void VerticalScanGround::labelPoints(GroundClassification* out) {
     const __m128i v_invalid_all = _mm_set1_epi32(-1);
     const __m128 v_pad = _mm_set1_ps(0.02f), v_minus_one = _mm_set1_ps(-1.f);
     const __m128 v_inv_v_slope = _mm_set1_ps(inv_v_slope);
+    const __m128 v_inv_foot = _mm_set1_ps(inv_foot);
     for (; i + 4 <= n; i += 4) {
       const __m128i b = _mm_loadu_si128(reinterpret_cast<const __m128i*>(bins + i));
       const __m128i invalid = _mm_cmpeq_epi32(b, v_invalid);
@@ -1143,8 +1162,9 @@ void VerticalScanGround::labelPoints(GroundClassification* out) {
       __m128 p4v = _mm_mul_ps(gt, st);
       if (vertical) {
         const __m128 g = _mm_min_ps(_mm_mul_ps(_mm_xor_ps(gnd_error, v_sign), v_inv_v_gnd), v_one);
-        const __m128 need = _mm_and_ps(_mm_cmplt_ps(gnd_error, v_zero),
-                                       _mm_and_ps(_mm_cmpgt_ps(g, v_thr), _mm_cmpgt_ps(g, p4v)));
+        const __m128 g_foot =
+            foot ? _mm_min_ps(_mm_mul_ps(_mm_sub_ps(h, _mm_min_ps(k0, ground)), v_inv_v_gnd), v_one) : g;
+        const __m128 need = _mm_and_ps(_mm_cmpgt_ps(g_foot, v_thr), _mm_cmpgt_ps(g_foot, p4v));
         const int need_bits = _mm_movemask_ps(need) & ~invalid_bits;
         if (need_bits) {
           // vertical_probability() on four lanes; the sentinel pairs keep the reads of rows
@@ -1173,8 +1193,11 @@ void VerticalScanGround::labelPoints(GroundClassification* out) {
                                            _mm_cmpge_ps(r_hi, v_zero));
           const __m128 sl_lo = _mm_div_ps(_mm_and_ps(_mm_sub_ps(h, h_lo), v_abs),
                                           _mm_add_ps(_mm_and_ps(_mm_sub_ps(r, r_lo), v_abs), v_pad));
-          const __m128 sl_hi = _mm_div_ps(_mm_and_ps(_mm_sub_ps(h, h_hi), v_abs),
-                                          _mm_add_ps(_mm_and_ps(_mm_sub_ps(r, r_hi), v_abs), v_pad));
+          // |h - h_hi| / d is |(h_hi - h) / d| exactly (d > 0; IEEE division is symmetric in
+          // sign): the rise to the row above serves both terms.
+          const __m128 rise = _mm_div_ps(_mm_sub_ps(h_hi, h),
+                                         _mm_add_ps(_mm_and_ps(_mm_sub_ps(r, r_hi), v_abs), v_pad));
+          const __m128 sl_hi = _mm_and_ps(rise, v_abs);
           // Both: the smaller (minps(sl_hi, sl_lo) = sl_hi < sl_lo ? sl_hi : sl_lo); one of
           // them: that one; neither: -1.
           const __m128 one_side = _mm_or_ps(_mm_and_ps(has_lo, sl_lo),
@@ -1185,7 +1208,13 @@ void VerticalScanGround::labelPoints(GroundClassification* out) {
                                          _mm_andnot_ps(both, one_side));
           const __m128 v = _mm_min_ps(_mm_mul_ps(local, v_inv_v_slope), v_one);
           // pv > prob ? pv : prob is maxps(pv, prob).
-          const __m128 with_pv = _mm_max_ps(_mm_mul_ps(g, v), p4v);
+          __m128 with_pv = _mm_max_ps(_mm_mul_ps(g, v), p4v);
+          if (foot) {
+            // The foot of a face (vertical_probability()), where the row above exists.
+            const __m128 u = _mm_min_ps(_mm_mul_ps(rise, v_inv_foot), v_one);
+            const __m128 with_pf = _mm_max_ps(_mm_mul_ps(g_foot, u), with_pv);
+            with_pv = _mm_or_ps(_mm_and_ps(has_hi, with_pf), _mm_andnot_ps(has_hi, with_pv));
+          }
           const __m128 take = _mm_and_ps(need, _mm_castsi128_ps(_mm_andnot_si128(invalid, v_invalid_all)));
           p4v = _mm_or_ps(_mm_and_ps(take, with_pv), _mm_andnot_ps(take, p4v));
         }
@@ -1223,12 +1252,19 @@ void VerticalScanGround::labelPoints(GroundClassification* out) {
     float st = abs_error / (r * s_max);
     st = st < 1.f ? st : 1.f;
     float prob_i = gt * st;
-    if (vertical && gnd_error < 0.f) {
-      // P_vertical = GndError factor * local slope factor; only evaluated where it can reach
-      // the threshold (its GndError factor exceeds it), 0 elsewhere.
+    if (vertical) {
+      // P_vertical = max(GndError factor * local slope factor, height above the foot factor *
+      // rise to the row above factor), evaluated only where it can reach the threshold (the
+      // foot's height factor, never below the GndError one, exceeds it). The foot is the lower
+      // of the line and its knot before r: where the piecewise line smears a step over a
+      // segment (a curb face, the bottom of a car's side), the height above the ground in
+      // front of the step.
       float g = -gnd_error * inv_v_gnd;
       g = g < 1.f ? g : 1.f;
-      if (g > thr && g > prob_i) prob_i = vertical_probability(b, r, h, g, prob_i);
+      const float foot_h = kh[k] < ground ? kh[k] : ground;
+      float g_foot = foot ? (h - foot_h) * inv_v_gnd : g;
+      g_foot = g_foot < 1.f ? g_foot : 1.f;
+      if (g_foot > thr && g_foot > prob_i) prob_i = vertical_probability(b, r, h, g, g_foot, prob_i);
     }
     prob[i] = prob_i;
     labels[i] = prob_i > thr ? kLabelObstacle : kLabelGround;
@@ -1264,6 +1300,7 @@ bool setVerticalScanParam(VerticalScanParams* p, const std::string& key, double 
       {"negative_gnd_error_max", &p->negative_gnd_error_max},
       {"vertical_gnd_error_max", &p->vertical_gnd_error_max},
       {"vertical_slope_max", &p->vertical_slope_max},
+      {"vertical_foot_slope", &p->vertical_foot_slope},
   };
   for (const FloatField& ff : floats) {
     if (key == ff.name) { *ff.field = f; return true; }
