@@ -1051,7 +1051,9 @@ void VerticalScanGround::labelPoints(GroundClassification* out) {
   const float inv_foot = foot ? 1.f / p.vertical_foot_slope : 0.f;
   // Eq 3.15's range-growing tolerances; GndErrorMax may differ below the line.
   const float g_above = tol.gnd_error_max_base;
-  const float g_below = p.negative_gnd_error_max > 0.f ? p.negative_gnd_error_max : g_above;
+  // g_below as g_above + (g_below - g_above), the sum the 4-wide loop forms per lane.
+  const float g_below_delta = (p.negative_gnd_error_max > 0.f ? p.negative_gnd_error_max : g_above) - g_above;
+  const float g_below = g_above + g_below_delta;
   const float g_per_m = tol.gnd_error_max_per_m;
   const float s_base = tol.slope_error_max_base;
   const float s_per_m = tol.slope_error_max_per_m;
@@ -1101,7 +1103,7 @@ void VerticalScanGround::labelPoints(GroundClassification* out) {
     const __m128 v_zero = _mm_setzero_ps(), v_one = _mm_set1_ps(1.f);
     const __m128 v_abs = _mm_castsi128_ps(_mm_set1_epi32(0x7fffffff));
     const __m128 v_sign = _mm_castsi128_ps(_mm_set1_epi32(static_cast<int>(0x80000000u)));
-    const __m128 v_g_above = _mm_set1_ps(g_above), v_g_below = _mm_set1_ps(g_below);
+    const __m128 v_g_above = _mm_set1_ps(g_above), v_g_below_delta = _mm_set1_ps(g_below_delta);
     const __m128 v_g_per_m = _mm_set1_ps(g_per_m);
     const __m128 v_s_base = _mm_set1_ps(s_base), v_s_per_m = _mm_set1_ps(s_per_m);
     const __m128 v_thr = _mm_set1_ps(thr), v_inv_v_gnd = _mm_set1_ps(inv_v_gnd);
@@ -1154,19 +1156,21 @@ void VerticalScanGround::labelPoints(GroundClassification* out) {
       const __m128 abs_error = _mm_and_ps(gnd_error, v_abs);
       const __m128 above = _mm_cmpgt_ps(gnd_error, v_zero);
       const __m128 g_max =
-          _mm_add_ps(_mm_or_ps(_mm_and_ps(above, v_g_below), _mm_andnot_ps(above, v_g_above)),
-                     _mm_mul_ps(v_g_per_m, r));
+          _mm_add_ps(_mm_add_ps(v_g_above, _mm_and_ps(above, v_g_below_delta)), _mm_mul_ps(v_g_per_m, r));
       const __m128 s_max = _mm_add_ps(v_s_base, _mm_mul_ps(v_s_per_m, r));
       const __m128 gt = _mm_min_ps(_mm_div_ps(abs_error, g_max), v_one);
       const __m128 st = _mm_min_ps(_mm_div_ps(abs_error, _mm_mul_ps(r, s_max)), v_one);
       __m128 p4v = _mm_mul_ps(gt, st);
       if (vertical) {
-        const __m128 g = _mm_min_ps(_mm_mul_ps(_mm_xor_ps(gnd_error, v_sign), v_inv_v_gnd), v_one);
-        const __m128 g_foot =
-            foot ? _mm_min_ps(_mm_mul_ps(_mm_sub_ps(h, _mm_min_ps(k0, ground)), v_inv_v_gnd), v_one) : g;
-        const __m128 need = _mm_and_ps(_mm_cmpgt_ps(g_foot, v_thr), _mm_cmpgt_ps(g_foot, p4v));
+        // The GndError factor g, and g_foot (g itself without the foot term), which gates both.
+        const __m128 above_foot = foot ? _mm_sub_ps(h, _mm_min_ps(k0, ground)) : _mm_xor_ps(gnd_error, v_sign);
+        const __m128 g_foot = _mm_min_ps(_mm_mul_ps(above_foot, v_inv_v_gnd), v_one);
+        // g_foot > thr && g_foot > P as one comparison.
+        const __m128 need = _mm_cmpgt_ps(g_foot, _mm_max_ps(v_thr, p4v));
         const int need_bits = _mm_movemask_ps(need) & ~invalid_bits;
         if (need_bits) {
+          const __m128 g =
+              foot ? _mm_min_ps(_mm_mul_ps(_mm_xor_ps(gnd_error, v_sign), v_inv_v_gnd), v_one) : g_foot;
           // vertical_probability() on four lanes; the sentinel pairs keep the reads of rows
           // below and above in bounds (unknown lanes read bin 0's).
           const __m128i bv = _mm_andnot_si128(invalid, b);
