@@ -60,7 +60,8 @@ struct RefinementParams {
   // instead weighted by its expected spread: noise_floor / sqrt(range_noise^2 (u . n)^2 +
   // s_j^2 / normal_neighbours + reference_noise^2) for a plane point (s_j / sqrt(k): the
   // uncertainty of the fitted plane, not the raw spread), noise_floor / sqrt(range_noise^2 +
-  // s_j^2) for an edge point. Ground and vertical faces are treated alike.
+  // s_j^2) for an edge point. Ground and vertical faces are treated alike. The calibrator uses it
+  // to score the members of a 2D ladar's ground-line sweep (CalibrationParams::sparse_range_noise).
   double range_noise = 0.0;
   double reference_noise = 0.0;  // [m] the floor of the reference plane's uncertainty
 };
