@@ -38,6 +38,8 @@ void usage() {
          "  along the way (default 2 m/s; 0 = 20 scans per segment, the old set-up)\n"
          "--sparse-noise-floor: 2D targets' residual weighting by the reference's local noise\n"
          "  (default 0.02 m, 0 = off)\n"
+         "--sparse-range-noise M, --sparse-reference-noise M: that weighting's target range noise\n"
+         "  (default 0.1 m, 0 = the reference spread alone) and reference plane floor (0.0025 m)\n"
          "--diagnose: per trial, the target's scans and points, the share of its points on\n"
          "  objects (> 0.3 m above the ground at the truth), the 2D ground-line sweep's costs and\n"
          "  the point-to-plane Hessian's eigenvalues and weakest eigenvectors at the truth and at\n"
@@ -215,6 +217,8 @@ int main(int argc, char** argv) {
   bool quiet = false, diagnose = false;
   double drive_speed = cal::ExperimentOptions().drive_speed;
   double sparse_noise_floor = cal::CalibrationParams().sparse_noise_floor;
+  double sparse_range_noise = cal::CalibrationParams().sparse_range_noise;
+  double sparse_reference_noise = cal::CalibrationParams().sparse_reference_noise;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     const auto value = [&](const char* name) -> std::string {
@@ -241,6 +245,8 @@ int main(int argc, char** argv) {
       else if (a == "--diagnose") diagnose = true;
       else if (a == "--drive-speed") drive_speed = std::stod(value("--drive-speed"));
       else if (a == "--sparse-noise-floor") sparse_noise_floor = std::stod(value("--sparse-noise-floor"));
+      else if (a == "--sparse-range-noise") sparse_range_noise = std::stod(value("--sparse-range-noise"));
+      else if (a == "--sparse-reference-noise") sparse_reference_noise = std::stod(value("--sparse-reference-noise"));
       else if (a == "--disk") corridor_given = true;  // the thesis's disk of poses on any world
       else if (a == "--centre") {
         const std::string v = value("--centre");
@@ -303,6 +309,8 @@ int main(int argc, char** argv) {
   if (bin > 0) params.bin_size = bin;
   if (probe > 0) params.observability.probe = probe;
   params.sparse_noise_floor = sparse_noise_floor;
+  params.sparse_range_noise = sparse_range_noise;
+  params.sparse_reference_noise = sparse_reference_noise;
 
   std::printf("pair %s (target %s against reference %s), world %s, method %s, %d trials, seed %llu, "
               "poses around (%.1f, %.1f)\n",

@@ -384,6 +384,42 @@ TEST(CalibrationScanPlane, RotationAboutTheGroundLineKeepsGroundReturns) {
   EXPECT_FALSE(cal::rotateAboutGroundLine(cal::makePose(1, 0, 2.0, 0, 0, 0), 0.1, 0.0, &moved));
 }
 
+// A 2D ladar's range noise moves its ground returns along their rays: weighted by the reference
+// alone, the residual shrinks as the scan plane flattens (u . n -> 0), so the flatter member of
+// the ground-line family scores better than the truth; with the range noise in the weighting
+// (RefinementParams::range_noise) the family scores alike over a flat ground.
+TEST(CalibrationRefinement, RangeNoiseWeightingRemovesTheFlatScanBias) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  cal::CalibrationInput in;
+  in.reference_extrinsic = cal::toIsometry(kReference);
+  const Eigen::Isometry3d t_sick = cal::toIsometry(kSick);
+  for (int k = 0; k < 20; ++k) {
+    const Eigen::Isometry3d vehicle =
+        cal::toIsometry(cal::makePose(3 * u(rng), 3 * u(rng), 0, 0, 0, 0.4 * u(rng)));
+    in.reference.addScan(k, vehicle, sampleScan(flat, vehicle * in.reference_extrinsic, 25.0, 0.3,
+                                                0.0, &rng));
+    in.target.addScan(k, vehicle, laserScan(flat, vehicle * t_sick, 30.0, 0.1, &rng));
+  }
+  cal::RefinementParams rp;
+  rp.keep_edges = true;
+  rp.noise_floor = 0.02;
+  cal::PointVector reference;
+  cal::accumulate(in.reference, in.reference_extrinsic, &reference);
+  cal::SurfaceModel model;
+  model.build(cal::voxelDownsample(reference, rp.reference_voxel), rp);
+  cal::Pose6 flatter;
+  ASSERT_TRUE(cal::rotateAboutGroundLine(kSick, 0.05, 0.0, &flatter));  // pitch 0.15
+  // The mean robust loss over the correspondences (the same returns find one in both).
+  const auto cost = [&](const cal::Pose6& p, const cal::RefinementParams& params) {
+    return cal::linearise(model, in.target, p, params.max_correspondence_end, params).cost;
+  };
+  EXPECT_LT(cost(flatter, rp), 0.8 * cost(kSick, rp));  // the bias
+  rp.range_noise = 0.1;
+  rp.reference_noise = 0.0025;
+  EXPECT_NEAR(cost(flatter, rp), cost(kSick, rp), 0.05 * cost(kSick, rp));
+}
+
 // A tilted 2D ladar calibrated against a dense 3D reference over the hills, the SICK accumulated
 // along a drive (75 Hz at ~2 m/s: one scan every ~3 cm; every 10th here), from a guess off along
 // the ground-line ambiguity (z and pitch together) and in the other DOFs.

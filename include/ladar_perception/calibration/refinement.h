@@ -52,6 +52,18 @@ struct RefinementParams {
   // angles). Used for 2D targets: without it their cost prefers mounts that move object returns
   // onto the crisper ground.
   double noise_floor = 0.0;
+  // When > 0 (and noise_floor > 0) [m]: the target's range noise (Table 4.1 accuracy). A range
+  // error moves a return along its ray, so its share of the point-to-plane residual is
+  // range_noise * (u . n), u the ray. Left unweighted, a noisy 2D ladar's ground returns fit the
+  // ground better the flatter its scan plane lies (the residual shrinks with u . n): the
+  // ground-line family (scan_plane.h) is then biased towards a lower tilt. The residual is
+  // instead weighted by its expected spread: noise_floor / sqrt(range_noise^2 (u . n)^2 +
+  // s_j^2 / normal_neighbours + reference_noise^2) for a plane point (s_j / sqrt(k): the
+  // uncertainty of the fitted plane, not the raw spread), noise_floor / sqrt(range_noise^2 +
+  // s_j^2) for an edge point. Ground and vertical faces are treated alike. The calibrator uses it
+  // to score the members of a 2D ladar's ground-line sweep (CalibrationParams::sparse_range_noise).
+  double range_noise = 0.0;
+  double reference_noise = 0.0;  // [m] the floor of the reference plane's uncertainty
 };
 
 // Reference points with normals, ready for correspondences.
@@ -67,10 +79,13 @@ class SurfaceModel {
   const PointVector& normals() const { return normals_; }
   // RMS spread of each point's neighbourhood about its plane (centroid for edge points) [m].
   const std::vector<float>& spreads() const { return spreads_; }
+  // The neighbourhood size of the plane fits (a plane's uncertainty is about spread / sqrt(k)).
+  int neighbours() const { return neighbours_; }
 
  private:
   PointVector points_, normals_;  // surface points (and edge points when keep_edges)
   std::vector<float> spreads_;
+  int neighbours_ = 1;
   KdTree tree_;
 };
 
@@ -85,7 +100,11 @@ struct Linearisation {
 };
 
 Linearisation linearise(const SurfaceModel& model, const ScanSet& target, const Pose6& extrinsic,
-                        double max_correspondence, double huber, double noise_floor = 0.0);
+                        double max_correspondence, double huber, double noise_floor = 0.0,
+                        double range_noise = 0.0, double reference_noise = 0.0);
+// The same with the weighting of `params` (noise_floor, range_noise, reference_noise, huber).
+Linearisation linearise(const SurfaceModel& model, const ScanSet& target, const Pose6& extrinsic,
+                        double max_correspondence, const RefinementParams& params);
 
 struct RefinementResult {
   Pose6 extrinsic = Pose6::Zero();

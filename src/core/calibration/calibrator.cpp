@@ -271,7 +271,14 @@ CalibrationResult calibrate(const CalibrationInput& input, const CalibrationPara
              !grazesGround(p, params.ground_z, params.min_ground_incidence,
                            params.target_max_range);
     };
-    // Refines a member with its ground-line rotation frozen; infinity when impossible.
+    // The members are refined with the refinement's weighting but scored with the 2D ladar's
+    // range noise in it (RefinementParams::range_noise): the ground's range noise otherwise
+    // favours the flatter members. (With it in the refinement as well, y came out 0.1-0.2 m off.)
+    RefinementParams scored = brief;
+    scored.range_noise = params.sparse_range_noise;
+    scored.reference_noise = params.sparse_reference_noise;
+    // Refines a member with its ground-line rotation frozen and scores it; infinity when
+    // impossible.
     const auto member = [&](const Pose6& start_pose, Pose6* refined) {
       if (!possible(start_pose)) return std::numeric_limits<double>::infinity();
       RefinementParams rp = brief;
@@ -283,18 +290,26 @@ CalibrationResult calibrate(const CalibrationInput& input, const CalibrationPara
       out.evaluations += r.iterations;
       *refined = r.extrinsic;
       if (!possible(r.extrinsic)) return std::numeric_limits<double>::infinity();
-      return sparseTargetCost(r.at_solution, target.numPoints(), rp);
+      const Linearisation at = scored.range_noise > 0
+                                   ? linearise(model, target, r.extrinsic,
+                                               scored.max_correspondence_end, scored)
+                                   : r.at_solution;
+      return sparseTargetCost(at, target.numPoints(), scored);
     };
     // The coarse estimate's other DOFs converged first (with the rotation frozen), so that the
-    // members differ by the rotation only; then two passes: the whole range, then +-one spacing
-    // around the best member in finer steps, started from that member.
+    // members differ by the rotation only; then plane_sweep_passes passes: the whole range, then
+    // each over the best member and the two halfway to its neighbours of the previous pass (a
+    // bisection; the best member's cost is kept), started from that member; a parabola through
+    // the last pass's three places the minimum.
     {
       Pose6 refined;
       if (std::isfinite(member(estimate, &refined))) estimate = refined;
     }
     int steps = std::max(1, params.plane_sweep_steps);
     double range = params.plane_sweep_range;
-    for (int pass = 0; pass < 2 && !cancelled; ++pass) {
+    double kept_cost = std::numeric_limits<double>::infinity();  // the best member's so far
+    const int passes = std::max(1, params.plane_sweep_passes);
+    for (int pass = 0; pass < passes && !cancelled; ++pass) {
       const double spacing = steps == 1 ? 0.0 : 2.0 * range / (steps - 1);
       std::vector<double> costs(steps, std::numeric_limits<double>::infinity());
       std::vector<Pose6> members(steps, estimate);
@@ -305,14 +320,15 @@ CalibrationResult calibrate(const CalibrationInput& input, const CalibrationPara
         if (angle != 0.0 && !rotateAboutGroundLine(estimate, angle, params.ground_z, &candidate)) {
           continue;
         }
-        costs[k] = member(candidate, &members[k]);
+        costs[k] = angle == 0.0 && pass > 0 ? kept_cost : member(candidate, &members[k]);
         if (std::isfinite(costs[k])) out.plane_sweep.emplace_back(angle, costs[k]);
         if (std::isfinite(costs[k]) && (best_k < 0 || costs[k] < costs[best_k])) best_k = k;
       }
       if (best_k < 0 || cancelled) break;
       estimate = members[best_k];
-      if (pass == 1 && best_k > 0 && best_k + 1 < steps && std::isfinite(costs[best_k - 1]) &&
-          std::isfinite(costs[best_k + 1])) {
+      kept_cost = costs[best_k];
+      if (pass == passes - 1 && pass > 0 && best_k > 0 && best_k + 1 < steps &&
+          std::isfinite(costs[best_k - 1]) && std::isfinite(costs[best_k + 1])) {
         const double cm = costs[best_k - 1], c0 = costs[best_k], cp = costs[best_k + 1];
         const double denom = cm - 2.0 * c0 + cp;
         if (denom > 0) {
@@ -325,8 +341,8 @@ CalibrationResult calibrate(const CalibrationInput& input, const CalibrationPara
           }
         }
       }
-      range = spacing;
-      steps = 5;
+      range = 0.5 * spacing;
+      steps = 3;
     }
     out.trace.push_back(estimate);
   }
@@ -358,19 +374,16 @@ CalibrationResult calibrate(const CalibrationInput& input, const CalibrationPara
     rp.max_correspondence_start = rp.max_correspondence_end;
     at = refine(model, target, estimate, rp).extrinsic;
     to_minimum = poseDifference(at, estimate);
-    lin = linearise(model, target, at, params.refinement.max_correspondence_end,
-                    params.refinement.huber, params.refinement.noise_floor);
+    lin = linearise(model, target, at, params.refinement.max_correspondence_end, params.refinement);
   } else if (!cancelled) {
     // lin is the refinement's linearisation at the solution.
   } else {
     lin = linearise(model, target, estimate, params.refinement.max_correspondence_end,
-                    params.refinement.huber, params.refinement.noise_floor);
+                    params.refinement);
   }
   const double max_corr = params.refinement.max_correspondence_end;
   const CostAlong cost_along = [&](const Pose6& step) {
-    return linearise(model, target, applyStep(at, step), max_corr, params.refinement.huber,
-                     params.refinement.noise_floor)
-        .cost;
+    return linearise(model, target, applyStep(at, step), max_corr, params.refinement).cost;
   };
   out.observability = analyseObservability(lin.hessian, lin.residual_variance,
                                            lin.correspondences, lin.lever_arm,

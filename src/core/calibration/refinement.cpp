@@ -13,6 +13,7 @@ void SurfaceModel::build(const PointVector& points, const RefinementParams& para
   points_.clear();
   normals_.clear();
   spreads_.clear();
+  neighbours_ = std::max(5, params.normal_neighbours);
   KdTree all(points);
   std::vector<int> idx;
   std::vector<float> d2;
@@ -60,12 +61,17 @@ void SurfaceModel::build(const PointVector& points, const RefinementParams& para
 }
 
 Linearisation linearise(const SurfaceModel& model, const ScanSet& target, const Pose6& extrinsic,
-                        double max_correspondence, double huber, double noise_floor) {
+                        double max_correspondence, double huber, double noise_floor,
+                        double range_noise, double reference_noise) {
   Linearisation lin;
   if (model.empty()) return lin;
   const Eigen::Isometry3d t_bs = toIsometry(extrinsic);
   const Eigen::Matrix3d r_bs = t_bs.linear();
   const float max2 = static_cast<float>(max_correspondence * max_correspondence);
+  const bool range_weighted = noise_floor > 0 && range_noise > 0;
+  const double nf2 = noise_floor * noise_floor, rn2 = range_noise * range_noise;
+  const double ref2 = reference_noise * reference_noise;
+  const double inv_k = 1.0 / std::max(1, model.neighbours());
   Eigen::Matrix<double, 6, 6> h = Eigen::Matrix<double, 6, 6>::Zero();
   Pose6 g = Pose6::Zero();
   double loss = 0, wr2 = 0, wsum = 0, lever2 = 0;
@@ -85,9 +91,22 @@ Linearisation linearise(const SurfaceModel& model, const ScanSet& target, const 
       const Eigen::Vector3d lever = r_bs * ps.cast<double>();
       Eigen::Vector3d e = (po - model.points()[j]).cast<double>();
       const bool edge = nrm.squaredNorm() < 0.25;
-      if (noise_floor > 0) {  // residual scaled by the reference's local noise
-        const double sj = model.spreads()[j];
-        e *= noise_floor / std::sqrt(noise_floor * noise_floor + sj * sj);
+      // The residual's scale: 1, or noise_floor over its expected spread (RefinementParams).
+      double scale = 1.0;
+      if (noise_floor > 0) {
+        const double sj2 = static_cast<double>(model.spreads()[j]) * model.spreads()[j];
+        if (range_weighted) {
+          double var = rn2 + sj2;  // edge: the whole range error is in the residual
+          if (!edge) {
+            const double un = (po - p_os).cast<double>().dot(nrm) /
+                              std::max(1e-6, static_cast<double>(ps.norm()));
+            var = rn2 * un * un + sj2 * inv_k + ref2;
+          }
+          scale = noise_floor / std::sqrt(std::max(var, 1e-12));
+        } else {
+          scale = noise_floor / std::sqrt(nf2 + sj2);
+        }
+        e *= scale;
       }
       // Plane: r = n . e (eq. of the surface); edge: |e| over the three odom axes.
       const double r = edge ? e.norm() : nrm.dot(e);
@@ -95,10 +114,6 @@ Linearisation linearise(const SurfaceModel& model, const ScanSet& target, const 
       const double w = ar <= huber ? 1.0 : huber / ar;  // Huber weight (IRLS)
       loss += ar <= huber ? 0.5 * r * r : huber * (ar - 0.5 * huber);
       if (edge) {
-        const double scale = noise_floor > 0
-                                 ? noise_floor / std::sqrt(noise_floor * noise_floor +
-                                                           model.spreads()[j] * model.spreads()[j])
-                                 : 1.0;
         for (int a = 0; a < 3; ++a) {
           const Eigen::Vector3d m = scale * r_ob.row(a).transpose();  // odom axis a, base_link
           Eigen::Matrix<double, 6, 1> jac;
@@ -108,10 +123,6 @@ Linearisation linearise(const SurfaceModel& model, const ScanSet& target, const 
           g.noalias() += w * e[a] * jac;
         }
       } else {
-        const double scale = noise_floor > 0
-                                 ? noise_floor / std::sqrt(noise_floor * noise_floor +
-                                                           model.spreads()[j] * model.spreads()[j])
-                                 : 1.0;
         const Eigen::Vector3d m = scale * (r_ob.transpose() * nrm);  // normal in base_link axes
         Eigen::Matrix<double, 6, 1> jac;
         jac.head<3>() = m;
@@ -132,6 +143,12 @@ Linearisation linearise(const SurfaceModel& model, const ScanSet& target, const 
   lin.residual_variance = wsum > 0 ? wr2 / wsum : 0;
   lin.lever_arm = n > 0 ? std::sqrt(lever2 / n) : 1.0;
   return lin;
+}
+
+Linearisation linearise(const SurfaceModel& model, const ScanSet& target, const Pose6& extrinsic,
+                        double max_correspondence, const RefinementParams& params) {
+  return linearise(model, target, extrinsic, max_correspondence, params.huber, params.noise_floor,
+                   params.range_noise, params.reference_noise);
 }
 
 Pose6 applyStep(const Pose6& extrinsic, const Pose6& step) {
@@ -159,8 +176,7 @@ RefinementResult refine(const SurfaceModel& model, const ScanSet& target, const 
     const double f = std::min(1.0, it / std::max(1.0, 0.5 * iters));
     const double max_corr = params.max_correspondence_start +
                             f * (params.max_correspondence_end - params.max_correspondence_start);
-    const Linearisation lin =
-        linearise(model, target, res.extrinsic, max_corr, params.huber, params.noise_floor);
+    const Linearisation lin = linearise(model, target, res.extrinsic, max_corr, params);
     if (lin.correspondences < 6) break;
     Matrix6 a = lin.hessian;
     const double floor = 1e-9 * std::max(1e-12, a.diagonal().maxCoeff());
@@ -199,8 +215,7 @@ RefinementResult refine(const SurfaceModel& model, const ScanSet& target, const 
       break;
     }
   }
-  res.at_solution = linearise(model, target, res.extrinsic, params.max_correspondence_end,
-                              params.huber, params.noise_floor);
+  res.at_solution = linearise(model, target, res.extrinsic, params.max_correspondence_end, params);
   return res;
 }
 
