@@ -357,6 +357,16 @@ int main(int argc, char** argv) {
       const cal::Pose6 curv = r.observability.curvature / std::max(1e-300, r.observability.curvature.maxCoeff());
       std::printf("          cost curvature along the Hessian's eigenvectors (relative): %.2g %.2g %.2g %.2g %.2g %.2g\n",
                   curv[0], curv[1], curv[2], curv[3], curv[4], curv[5]);
+      const cal::Pose6& ms = r.observability.measured_stddev;
+      std::printf("          stddev from the measured curvature: x %.3g y %.3g z %.3g m, roll %.3g pitch %.3g yaw %.3g rad"
+                  " (sigma^2 %.3g, N %ld, eigen-curvatures %.3g %.3g %.3g %.3g %.3g %.3g)\n",
+                  ms[0], ms[1], ms[2], ms[3], ms[4], ms[5], r.refinement.at_solution.residual_variance,
+                  r.refinement.at_solution.correspondences,
+                  r.observability.curvature[0], r.observability.curvature[1], r.observability.curvature[2],
+                  r.observability.curvature[3], r.observability.curvature[4], r.observability.curvature[5]);
+      const cal::Pose6& sg = r.observability.significance;
+      std::printf("          curvature significance (mean / standard error): %.3g %.3g %.3g %.3g %.3g %.3g\n",
+                  sg[0], sg[1], sg[2], sg[3], sg[4], sg[5]);
       if (pf) {
         std::printf("          weighted mean: error x %+.4f y %+.4f z %+.4f m, roll %+.5f pitch %+.5f "
                     "yaw %+.5f rad; %d iterations, final spread %.4f %.4f %.4f m %.5f %.5f %.5f rad\n",

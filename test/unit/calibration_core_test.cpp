@@ -259,6 +259,51 @@ TEST(CalibrationObservability, FlatPlaneAndAlleyAreNamed) {
   EXPECT_TRUE(o.observable());
 }
 
+// The per-point rule: a direction whose points' second differences only wobble about zero is
+// weak however large its Hessian eigenvalue, and a weak-but-real curvature (a 2D target's
+// ground-line directions) fixes its DOF when the standard deviation it gives is within the
+// accuracy wanted, whatever its ratio to the strongest.
+TEST(CalibrationObservability, PerPointCurvatureAgainstNoiseAndTolerance) {
+  const int n = 20000;
+  const double h = 0.1;
+  cal::Matrix6 hess = cal::Matrix6::Zero();
+  hess.diagonal() << 1e-4, 1e-4, 1.0, 1.0, 1.0, 1.0;  // per correspondence, lever arm 1
+  hess *= n;
+  // Loss of point i at a step: 0.5 c_d (step_d)^2 summed over d plus a per-point wobble.
+  const auto make = [&](const cal::Pose6& curv, const cal::Pose6& wobble) {
+    return [=](const cal::Pose6& step, std::vector<float>* losses) {
+      losses->assign(n, 0.0f);
+      for (int i = 0; i < n; ++i) {
+        double l = 1e-3;
+        for (int d = 0; d < 6; ++d) {
+          const double sign = ((i * 7919 + d * 104729) % 2) ? 1.0 : -1.0;
+          l += 0.5 * curv[d] * step[d] * step[d] + sign * wobble[d] * std::abs(step[d]) / h;
+        }
+        (*losses)[i] = static_cast<float>(l);
+      }
+    };
+  };
+  cal::Pose6 curv;
+  curv << 1e-4, 1e-4, 1.0, 1.0, 1.0, 1.0;
+  // Curvature 1e-4 of the strongest but sigma^2 1e-4 over 20000 points: 0.007 m, fixed.
+  cal::Observability o = cal::analyseObservability(hess, 1e-4, n, 1.0, cal::ObservabilityParams(),
+                                                   nullptr, make(curv, cal::Pose6::Zero()));
+  EXPECT_TRUE(o.observable()) << o.measured_stddev.transpose();
+  EXPECT_NEAR(o.measured_stddev[cal::kX], std::sqrt(1e-4 / (n * 1e-4)), 1e-4);
+  // The same Hessian, but along x and y the points' losses only wobble (no mean curvature).
+  curv[cal::kX] = curv[cal::kY] = 0.0;
+  cal::Pose6 wobble = cal::Pose6::Zero();
+  wobble[cal::kX] = wobble[cal::kY] = 1e-5;
+  o = cal::analyseObservability(hess, 1e-4, n, 1.0, cal::ObservabilityParams(), nullptr,
+                                make(curv, wobble));
+  EXPECT_EQ(o.unobservable_names, (std::vector<std::string>{"x", "y"}));
+  // A real curvature too weak for the accuracy wanted: sigma^2 = 1 gives 0.7 m in x.
+  curv[cal::kX] = curv[cal::kY] = 1e-4;
+  o = cal::analyseObservability(hess, 1.0, n, 1.0, cal::ObservabilityParams(), nullptr,
+                                make(curv, cal::Pose6::Zero()));
+  EXPECT_EQ(o.unobservable_names, (std::vector<std::string>{"x", "y"}));
+}
+
 TEST(CalibrationCalibrator, DefaultMethodOnHills) {
   const cal::CalibrationInput in = makeInput(hills, kReference, kTarget, 6, 0.03, 11);
   cal::CalibrationParams p;

@@ -24,10 +24,19 @@ struct ObservabilityParams {
   double min_projection = 0.5;
   // Probe length for the measured curvature [m; radians are scaled by the lever arm].
   double probe = 0.1;
+  // With per-point losses (LossesAlong): a direction is fixed only when its measured curvature,
+  // the mean of the points' second differences, is at least this many standard errors above
+  // zero (a flat direction's re-associated cost only wobbles), and a DOF is unobservable when
+  // its standard deviation sqrt(diag(sigma^2 / N * H_measured^-1)) exceeds the accuracy wanted
+  // (max_stddev [m], max_stddev_rotation [rad]); the relative threshold is then not used.
+  double min_significance = 3.0;
+  double max_stddev_rotation = 0.01;
 };
 
 // The cost at the solution moved by a step in (x, y, z, rotation) coordinates (see refinement.h).
 using CostAlong = std::function<double(const Pose6& step)>;
+// The same, each target point's loss (NaN without a correspondence) into *losses.
+using LossesAlong = std::function<void(const Pose6& step, std::vector<float>* losses)>;
 
 struct Observability {
   Pose6 stddev = Pose6::Zero();          // sqrt(diag(sigma^2 H^+)); infinity when unobservable
@@ -35,6 +44,11 @@ struct Observability {
   std::vector<std::string> unobservable_names;
   Pose6 eigenvalues = Pose6::Zero();     // of the scaled, per-correspondence Hessian, ascending
   Pose6 curvature = Pose6::Zero();       // measured along the same eigenvectors (or = eigenvalues)
+  // Per DOF, the standard deviation from the measured curvature and the residual variance,
+  // sqrt(diag(S V diag(sigma^2 / (N c_k)) V^T S)) [m, rad]; infinity along a flat direction.
+  Pose6 measured_stddev = Pose6::Zero();
+  // Per eigenvector: the measured curvature over its standard error (LossesAlong only, else 0).
+  Pose6 significance = Pose6::Zero();
   double relative_min = 0;               // smallest / largest scaled eigenvalue
   bool observable() const { return unobservable.empty(); }
 };
@@ -48,7 +62,8 @@ struct Observability {
 Observability analyseObservability(const Matrix6& hessian, double residual_variance,
                                    long correspondences, double lever_arm,
                                    const ObservabilityParams& params = ObservabilityParams(),
-                                   const CostAlong& cost_along = nullptr);
+                                   const CostAlong& cost_along = nullptr,
+                                   const LossesAlong& losses_along = nullptr);
 
 }  // namespace calibration
 }  // namespace ladar_perception

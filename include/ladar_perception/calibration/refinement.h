@@ -101,10 +101,14 @@ struct Linearisation {
 
 Linearisation linearise(const SurfaceModel& model, const ScanSet& target, const Pose6& extrinsic,
                         double max_correspondence, double huber, double noise_floor = 0.0,
-                        double range_noise = 0.0, double reference_noise = 0.0);
+                        double range_noise = 0.0, double reference_noise = 0.0,
+                        std::vector<float>* point_loss = nullptr);
 // The same with the weighting of `params` (noise_floor, range_noise, reference_noise, huber).
+// point_loss, when given: each target point's Huber loss, NaN without a correspondence (sized
+// once per call, not per point).
 Linearisation linearise(const SurfaceModel& model, const ScanSet& target, const Pose6& extrinsic,
-                        double max_correspondence, const RefinementParams& params);
+                        double max_correspondence, const RefinementParams& params,
+                        std::vector<float>* point_loss = nullptr);
 
 struct RefinementResult {
   Pose6 extrinsic = Pose6::Zero();

@@ -385,9 +385,12 @@ CalibrationResult calibrate(const CalibrationInput& input, const CalibrationPara
   const CostAlong cost_along = [&](const Pose6& step) {
     return linearise(model, target, applyStep(at, step), max_corr, params.refinement).cost;
   };
+  const LossesAlong losses_along = [&](const Pose6& step, std::vector<float>* losses) {
+    linearise(model, target, applyStep(at, step), max_corr, params.refinement, losses);
+  };
   out.observability = analyseObservability(lin.hessian, lin.residual_variance,
                                            lin.correspondences, lin.lever_arm,
-                                           params.observability, cost_along);
+                                           params.observability, cost_along, losses_along);
   out.stddev = out.observability.stddev;
   out.unobservable = out.observability.unobservable_names;
   out.extrinsic = estimate;

@@ -12,7 +12,8 @@ namespace calibration {
 Observability analyseObservability(const Matrix6& hessian, double residual_variance,
                                    long correspondences, double lever_arm,
                                    const ObservabilityParams& params,
-                                   const CostAlong& cost_along) {
+                                   const CostAlong& cost_along,
+                                   const LossesAlong& losses_along) {
   Observability out;
   const double inf = std::numeric_limits<double>::infinity();
   if (correspondences <= 0 || !hessian.allFinite()) {
@@ -31,7 +32,38 @@ Observability analyseObservability(const Matrix6& hessian, double residual_varia
   Eigen::SelfAdjointEigenSolver<Matrix6> es(hs);
   out.eigenvalues = es.eigenvalues();
   out.curvature = out.eigenvalues;
-  if (cost_along) {
+  const bool by_points = static_cast<bool>(losses_along);
+  if (by_points) {
+    // Per point: d_i = l_i(+h v) + l_i(-h v) - 2 l_i(0); curvature = mean(d) / h^2, its
+    // standard error sd(d) / sqrt(n) / h^2 (points with a correspondence at all three).
+    std::vector<float> l0, lp, lm;
+    losses_along(Pose6::Zero(), &l0);
+    const double h = params.probe;
+    for (int k = 0; k < 6; ++k) {
+      const Pose6 step = s.asDiagonal() * (h * es.eigenvectors().col(k));
+      losses_along(step, &lp);
+      losses_along(-step, &lm);
+      double sum = 0, sum2 = 0;
+      long n = 0;
+      const std::size_t m = std::min(l0.size(), std::min(lp.size(), lm.size()));
+      for (std::size_t i = 0; i < m; ++i) {
+        const double d = static_cast<double>(lp[i]) + lm[i] - 2.0 * l0[i];
+        if (!std::isfinite(d)) continue;
+        sum += d;
+        sum2 += d * d;
+        ++n;
+      }
+      if (n < 2) {
+        out.curvature[k] = 0;
+        continue;
+      }
+      const double mean = sum / n;
+      const double var = std::max(0.0, (sum2 - n * mean * mean) / (n - 1));
+      const double se = std::sqrt(var / n);
+      out.curvature[k] = std::max(0.0, mean / (h * h));
+      out.significance[k] = se > 0 ? mean / se : (mean > 0 ? inf : 0.0);
+    }
+  } else if (cost_along) {
     const double c0 = cost_along(Pose6::Zero());
     const double h = params.probe;
     for (int k = 0; k < 6; ++k) {
@@ -41,6 +73,17 @@ Observability analyseObservability(const Matrix6& hessian, double residual_varia
     }
   }
   const double top = std::max(out.curvature.maxCoeff(), 1e-300);
+  {
+    // Covariance sigma^2 / N * (measured Hessian)^-1 back in (t, w) units; a direction measured
+    // flat (curvature <= 0, or 1e-12 of the strongest) counts as next to infinitely uncertain.
+    Pose6 var = Pose6::Zero();
+    for (int k = 0; k < 6; ++k) {
+      const Pose6 v = s.asDiagonal() * es.eigenvectors().col(k);
+      const double c = std::max(out.curvature[k], 1e-12 * top);
+      var += v.cwiseAbs2() * (residual_variance / (static_cast<double>(correspondences) * c));
+    }
+    out.measured_stddev = var.cwiseSqrt();
+  }
   out.relative_min = out.curvature.minCoeff() / top;
   // Weak: flat relative to the strongest direction, or too flat to fix the solution to
   // max_stddev given the residual noise and the number of correspondences.
@@ -50,7 +93,9 @@ Observability analyseObservability(const Matrix6& hessian, double residual_varia
         out.curvature[k] > 0
             ? std::sqrt(residual_variance / (static_cast<double>(correspondences) * out.curvature[k]))
             : inf;
-    weak[k] = out.curvature[k] < params.relative_threshold * top || predicted > params.max_stddev;
+    weak[k] = by_points ? out.significance[k] < params.min_significance
+                        : out.curvature[k] < params.relative_threshold * top ||
+                              predicted > params.max_stddev;
   }
   Matrix6 weak_projector = Matrix6::Zero();
   Matrix6 pinv = Matrix6::Zero();  // pseudo-inverse over the strong directions
@@ -68,6 +113,13 @@ Observability analyseObservability(const Matrix6& hessian, double residual_varia
   // Each weak direction names at least its dominant DOF, even when it mixes several.
   std::array<bool, 6> weak_dof{};
   for (int i = 0; i < 6; ++i) weak_dof[i] = weak_projector(i, i) >= params.min_projection;
+  if (by_points) {
+    // The accuracy wanted, per DOF, against the standard deviation from the measured curvature.
+    for (int i = 0; i < 6; ++i) {
+      const double tol = i < 3 ? params.max_stddev : params.max_stddev_rotation;
+      if (out.measured_stddev[i] > tol) weak_dof[i] = true;
+    }
+  }
   for (int k = 0; k < 6; ++k) {
     if (!weak[k]) continue;
     int dominant = 0;

@@ -1,6 +1,7 @@
 #include "ladar_perception/calibration/refinement.h"
 
 #include <cmath>
+#include <limits>
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
@@ -62,8 +63,10 @@ void SurfaceModel::build(const PointVector& points, const RefinementParams& para
 
 Linearisation linearise(const SurfaceModel& model, const ScanSet& target, const Pose6& extrinsic,
                         double max_correspondence, double huber, double noise_floor,
-                        double range_noise, double reference_noise) {
+                        double range_noise, double reference_noise,
+                        std::vector<float>* point_loss) {
   Linearisation lin;
+  if (point_loss) point_loss->assign(target.numPoints(), std::numeric_limits<float>::quiet_NaN());
   if (model.empty()) return lin;
   const Eigen::Isometry3d t_bs = toIsometry(extrinsic);
   const Eigen::Matrix3d r_bs = t_bs.linear();
@@ -112,7 +115,9 @@ Linearisation linearise(const SurfaceModel& model, const ScanSet& target, const 
       const double r = edge ? e.norm() : nrm.dot(e);
       const double ar = std::abs(r);
       const double w = ar <= huber ? 1.0 : huber / ar;  // Huber weight (IRLS)
-      loss += ar <= huber ? 0.5 * r * r : huber * (ar - 0.5 * huber);
+      const double li = ar <= huber ? 0.5 * r * r : huber * (ar - 0.5 * huber);
+      loss += li;
+      if (point_loss) (*point_loss)[i] = static_cast<float>(li);
       if (edge) {
         for (int a = 0; a < 3; ++a) {
           const Eigen::Vector3d m = scale * r_ob.row(a).transpose();  // odom axis a, base_link
@@ -146,9 +151,10 @@ Linearisation linearise(const SurfaceModel& model, const ScanSet& target, const 
 }
 
 Linearisation linearise(const SurfaceModel& model, const ScanSet& target, const Pose6& extrinsic,
-                        double max_correspondence, const RefinementParams& params) {
+                        double max_correspondence, const RefinementParams& params,
+                        std::vector<float>* point_loss) {
   return linearise(model, target, extrinsic, max_correspondence, params.huber, params.noise_floor,
-                   params.range_noise, params.reference_noise);
+                   params.range_noise, params.reference_noise, point_loss);
 }
 
 Pose6 applyStep(const Pose6& extrinsic, const Pose6& step) {
