@@ -95,9 +95,13 @@ TEST_F(Faults, TfLateNeverAndJumpingBack) {
 
   // Never: scans of a frame nobody publishes are dropped (pushed out of the filter's queue of
   // 3) and counted, and the nodelet goes on with valid scans.
-  // Paced on the drop count so the subscriber's own queue (3) never overflows unseen.
+  // Paced on the drop count so the subscriber's own queue (3) never overflows unseen; the first
+  // three fill the filter and drop nothing, so nothing observable tells that they left the
+  // subscriber's queue: they are given time instead (published back to back, the first could
+  // still be in that queue when the fourth arrives, and roscpp would drop it silently).
   for (int i = 0; i < 10; ++i) {
     pub.publish(cloudMsg(cloud, "never_published", t + ros::Duration(0.1 * i)));
+    if (i < 3) ros::WallDuration(0.3).sleep();
     const uint64_t expected = i >= 3 ? static_cast<uint64_t>(i - 2) : 0u;
     ASSERT_TRUE(waitFor([&] { return adapter.health().errorCount("missing tf") == expected; }, 10.0))
         << "scan " << i << ": " << adapter.health().errorCount("missing tf") << " dropped";
