@@ -1162,7 +1162,8 @@ void VerticalScanGround::labelPoints(GroundClassification* out) {
       const __m128 st = _mm_min_ps(_mm_div_ps(abs_error, _mm_mul_ps(r, s_max)), v_one);
       __m128 p4v = _mm_mul_ps(gt, st);
       if (vertical) {
-        // The GndError factor g, and g_foot (g itself without the foot term), which gates both.
+        // g_foot (the height-above-the-foot factor; g itself without the foot term) gates both
+        // terms; the GndError factor g is needed only where they run.
         const __m128 above_foot = foot ? _mm_sub_ps(h, _mm_min_ps(k0, ground)) : _mm_xor_ps(gnd_error, v_sign);
         const __m128 g_foot = _mm_min_ps(_mm_mul_ps(above_foot, v_inv_v_gnd), v_one);
         // g_foot > thr && g_foot > P as one comparison.
