@@ -1,7 +1,9 @@
-// Observability check from the curvature of the cost at the solution: the eigenvalues of the
+// Observability check from the curvature of the cost at the solution: the eigenvectors of the
 // Gauss-Newton Hessian J^T W J (rotations scaled by the lever arm so metres and radians compare).
-// Directions whose curvature is a small fraction of the strongest are ones the scene cannot fix
-// (the long axis of an alley; x, y and yaw over a flat plane); the DOFs lying mostly in that weak
+// Directions the scene cannot fix (the long axis of an alley; x, y and yaw over a flat plane)
+// are weak: with per-point losses, those whose measured curvature is not significantly above
+// the points' noise, or too small for the accuracy wanted (see min_significance); without them,
+// those whose curvature is a small fraction of the strongest. The DOFs lying mostly in the weak
 // subspace are named, and their standard deviations are infinite instead of a made-up figure.
 #pragma once
 
