@@ -3,6 +3,10 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <memory>
+#include <new>
+#include <type_traits>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Geometry>
@@ -16,11 +20,36 @@ enum Label : uint8_t {
   kLabelUnknown = 2,  // not evaluated: NaN/Inf return, out of range, no ground estimate
 };
 
+// An allocator whose construct() without a value default-initialises: resize() of a vector of
+// bytes or floats then leaves the new elements unwritten instead of zero-filling them.
+template <typename T, typename Base = std::allocator<T>>
+class DefaultInitAllocator : public Base {
+  using Traits = std::allocator_traits<Base>;
+
+ public:
+  template <typename U>
+  struct rebind {
+    using other = DefaultInitAllocator<U, typename Traits::template rebind_alloc<U>>;
+  };
+  using Base::Base;
+  DefaultInitAllocator() = default;
+  template <typename U>
+  void construct(U* p) noexcept(std::is_nothrow_default_constructible<U>::value) {
+    ::new (static_cast<void*>(p)) U;
+  }
+  template <typename U, typename... Args>
+  void construct(U* p, Args&&... args) {
+    Traits::construct(static_cast<Base&>(*this), p, std::forward<Args>(args)...);
+  }
+};
+
 // Per-point result, indexed like the input cloud. Keep one instance per stream and reuse it:
-// resize() keeps the capacity, so steady-state scans do not allocate.
+// resize() keeps the capacity, so steady-state scans do not allocate. resize() does not
+// initialise new elements: every ground model writes the label and P(obstacle) of every
+// point it is given (unknown and 0 where it cannot evaluate one).
 struct GroundClassification {
-  std::vector<uint8_t> labels;
-  std::vector<float> p_obstacle;
+  std::vector<uint8_t, DefaultInitAllocator<uint8_t>> labels;
+  std::vector<float, DefaultInitAllocator<float>> p_obstacle;
 
   void resize(std::size_t n) {
     labels.resize(n);
