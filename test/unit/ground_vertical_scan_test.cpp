@@ -164,6 +164,36 @@ TEST(VerticalScanEquations, TrackedLineDoesNotClimbAWall) {
   EXPECT_LT(line.heightAt(13.f), 0.5f);
 }
 
+TEST(VerticalScanEquations, TrackedLineBridgesAPothole) {
+  // Road, a pothole (floor 18 cm down, then its far wall rising back to the road 3 cm below
+  // the rim), road again: the returns inside are 0.5-1 m after the last road return, where the
+  // drop tolerance has grown by 2.5-5 cm. The wall's return 6.4 cm down would be within it;
+  // after the floor, the gap is a hole, not unobserved terrain, so the line stays on the road.
+  VerticalScanParams p = verticalScanDefaultParams();
+  std::vector<float> r, h;
+  for (float x = 3.8f; x < 5.05f; x += 0.12f) { r.push_back(x); h.push_back(0.f); }
+  for (float x = 5.5f; x < 5.95f; x += 0.09f) { r.push_back(x); h.push_back(-0.18f); }
+  r.push_back(6.03f);
+  h.push_back(-0.064f);
+  for (float x = 6.2f; x < 9.f; x += 0.2f) { r.push_back(x); h.push_back(0.f); }
+  const int knots = 16;
+  std::vector<float> kh(knots), ks(knots), scratch(2 * (r.size() + 1));
+  vertical_scan::trackGroundLine(r.data(), h.data(), static_cast<int>(r.size()), p, 0.f, knots,
+                                 kh.data(), ks.data(), scratch.data());
+  vertical_scan::GroundLine line{kh.data(), knots, 1.f / p.segment_length};
+  for (float x : {5.25f, 5.7f, 6.0f, 6.1f}) EXPECT_NEAR(line.heightAt(x), 0.f, 0.01f) << "r " << x;
+  // Its floor and wall are then below the line by more than negative_gnd_error_max.
+  EXPECT_GT(line.heightAt(6.03f) - (-0.064f), p.negative_gnd_error_max);
+  // Without the floor the same far-wall return is a gentle dip the line may follow.
+  std::vector<float> r2, h2;
+  for (std::size_t i = 0; i < r.size(); ++i) {
+    if (h[i] > -0.1f) { r2.push_back(r[i]); h2.push_back(h[i]); }
+  }
+  vertical_scan::trackGroundLine(r2.data(), h2.data(), static_cast<int>(r2.size()), p, 0.f, knots,
+                                 kh.data(), ks.data(), scratch.data());
+  EXPECT_LT(line.heightAt(6.03f), -0.03f);
+}
+
 // ---------------------------------------------------------------- row assignment
 
 TEST(ElevationRowTable, EveryHdl64eLaserMapsToItsRing) {

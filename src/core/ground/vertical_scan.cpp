@@ -316,6 +316,9 @@ int trackGroundLine(const float* r, const float* height, int n, const VerticalSc
   // Returns below the extrapolation that agree with each other: where the ground reappears
   // lower (behind an obstacle the line went over, or down a ditch wider than a pothole).
   int below_first = -1, below_last = -1;
+  bool hole = false;
+  const float hole_depth =
+      p.negative_gnd_error_max > 0.f ? p.negative_gnd_error_max : p.tolerances.gnd_error_max_base;
   for (int i = 0; i < n; ++i) {
     const float dr = r[i] - gr[m - 1];
     const float dh = height[i] - gh[m - 1];
@@ -327,7 +330,12 @@ int trackGroundLine(const float* r, const float* height, int n, const VerticalSc
     // well below the line. Until a return is accepted, the line is trusted no more below than
     // above (track_max_step); after that the drop tolerance applies.
     const float drop = m == 1 ? std::max(p.track_max_drop, p.track_max_step) : p.track_max_drop;
-    if (res < -(drop + grow)) {
+    // The drop tolerance grows with the gap since the last ground return, for the sparser
+    // returns at range. A gap that a hole opened (returns seen well below the line since the
+    // last ground return: a pothole's floor) was not unobserved terrain, so there it does not
+    // grow; otherwise the line follows the pothole's far wall down and its floor becomes ground.
+    if (res < -(drop + (hole ? 0.f : grow))) {
+      if (res < -(drop + grow + hole_depth)) hole = true;
       // Below the line: remember a run of mutually consistent returns.
       if (below_last >= 0 &&
           std::fabs(height[i] - height[below_last]) <
@@ -348,6 +356,7 @@ int trackGroundLine(const float* r, const float* height, int n, const VerticalSc
       }
       anchor = m - 2 > 0 ? m - 2 : 0;
       below_first = below_last = -1;
+      hole = false;
       last_steep = false;
       continue;
     }
@@ -356,6 +365,7 @@ int trackGroundLine(const float* r, const float* height, int n, const VerticalSc
     if (local > p.track_max_local_slope || local < p.track_min_local_slope) continue;
     if (dr <= 0.f) continue;  // same distance as the last ground return: keep the first
     below_first = below_last = -1;
+    hole = false;
     const bool steep = local > p.ground_slope_max;
     if (steep && last_steep) {
       // Two steps in a row climb a wall or a car, not a curb: the previous step was not
