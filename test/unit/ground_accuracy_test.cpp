@@ -6,7 +6,9 @@
 // incidence; potholes: shallow bowl edges; obstacle recall on the hillside's poles and car),
 // it asserts the level measured when the test was written, so a regression fails, and the gap
 // is reported in the ground_eval table rather than hidden.
+#include <cstring>
 #include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -54,10 +56,11 @@ INSTANTIATE_TEST_SUITE_P(
         // before the foot-of-a-face term; curb faces and the lowest parts of cars and walls
         // lie within 2 cm of the road).
         Expectation{"urban", 0.97, 0.99, 0.955},
-        // Ground targets met; pothole recall measured 51.8 % on these 3 scans (61.2 % over
-        // 10; 56.7 % on these 3 with 1 m knots, which left the road in front of curbs and cars
-        // below the line). A fifth of the pothole returns lie within 3 cm of the road plane.
-        Expectation{"potholes", 0.99, 0.99, 0.51}),
+        // Ground targets met; pothole recall measured 53.7 % on these 3 scans (66.0 % over
+        // 10; 51.8 % before the tracked line bridged the hole, 56.7 % with 1 m knots, which
+        // left the road in front of curbs and cars below the line). A fifth of the pothole
+        // returns lie within 3 cm of the road plane.
+        Expectation{"potholes", 0.99, 0.99, 0.53}),
     [](const ::testing::TestParamInfo<Expectation>& info) { return std::string(info.param.world); });
 
 TEST(GroundAccuracy, DefaultBeatsThesisOnObstaclesAndKeepsTheGround) {
@@ -71,6 +74,52 @@ TEST(GroundAccuracy, DefaultBeatsThesisOnObstaclesAndKeepsTheGround) {
   const GroundAccuracy thesis_holes = evaluate("potholes", verticalScanThesisParams());
   const GroundAccuracy fresh_holes = evaluate("potholes", verticalScanDefaultParams());
   EXPECT_GT(fresh_holes.obstacleRecall(), thesis_holes.obstacleRecall() + 0.3);
+}
+
+TEST(GroundAccuracy, ObstacleReturnsAtTheGroundAreMarked) {
+  // Road at height 0 with a 1 m box (class car) over x in [5, 6]: returns on its face within
+  // 2 cm of the road next to it are at the ground; higher ones, the box's top and the road's
+  // own returns are not.
+  sim::World world;
+  std::string error;
+  ASSERT_TRUE(world.reset(0.0, -5.0, 0.1, 100, 100, 0.f, sim::SurfaceClass::kRoad, &error)) << error;
+  for (int ix = 50; ix < 60; ++ix) {
+    for (int iy = 0; iy < 100; ++iy) world.setCell(ix, iy, 1.f, sim::SurfaceClass::kCar);
+  }
+  world.finalize();
+  const std::vector<Eigen::Vector3f> points = {
+      {5.01f, 0.f, 0.01f}, {5.01f, 0.f, 0.1f}, {5.01f, 0.f, 0.5f}, {5.5f, 0.f, 1.f}, {3.f, 0.f, 0.f}};
+  const std::vector<uint8_t> truth = {4, 4, 4, 4, 0};
+  CloudLayout l = xyziLayout(static_cast<uint32_t>(points.size()));
+  PackedCloud cloud;
+  cloud.layout = l;
+  cloud.data.assign(static_cast<std::size_t>(l.row_step) * l.height, 0);
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    std::memcpy(cloud.data.data() + i * l.point_step, points[i].data(), 12);
+  }
+  PointCloudView view;
+  ASSERT_TRUE(cloud.view(&view, &error)) << error;
+  std::vector<uint8_t> at_ground;
+  markObstacleReturnsAtTheGround(world, Eigen::Isometry3d::Identity(), view, truth, 0.02, &at_ground);
+  EXPECT_EQ(at_ground, (std::vector<uint8_t>{1, 0, 0, 0, 0}));
+}
+
+TEST(GroundAccuracy, TargetsOnTheReturnsAwayFromTheGround) {
+  // Scoring only the obstacle returns more than 2 cm from the ground next to them (the
+  // --at-ground-band 0.02 of ground_eval): the obstacle recall target is met on urban and the
+  // hillside; measured on these 3 scans 98.2 / 99.0 / 97.4 % (urban), 99.96 / 99.7 / 97.1 %
+  // (hillside), 61.2 % of the potholes.
+  VerticalScanGround model(verticalScanDefaultParams());
+  for (const char* w : {"urban", "hillside"}) {
+    GroundAccuracy acc;
+    std::string error;
+    ASSERT_TRUE(evaluateGroundModel(w, &model, sim::NoiseProfile::kDatasheet, 3, 1, &acc, &error, 0.02))
+        << error;
+    EXPECT_GT(acc.not_scored, 0u) << w;
+    EXPECT_GE(acc.obstacleRecall(), 0.97) << w;
+    EXPECT_GE(acc.groundPrecision(), 0.98) << w;
+    EXPECT_GE(acc.groundRecall(), 0.99) << w;
+  }
 }
 
 }  // namespace
