@@ -70,8 +70,8 @@ struct VerticalScanParams {
   // The foot of a vertical face (a curb's lower half, the bottom of a car's side): the line's
   // segment across a step smears it, so these returns lie below or barely above the line.
   // A third term, P_foot = min(height above the foot / vertical_gnd_error_max, 1) *
-  // min(rise / vertical_foot_slope, 1), where the foot is the lower of the line and its knot
-  // before r (the ground in front of the step) and the rise is dHeight / |dr| to the
+  // min(rise / vertical_foot_slope, 1), where the foot is the lowest of the line and its two
+  // knots before r (the ground in front of the step) and the rise is dHeight / |dr| to the
   // representative of the laser row above. P = max(P_3.15, P_vertical, P_foot). 0 = off.
   float vertical_foot_slope = 1.0f;
 };
@@ -258,9 +258,15 @@ class VerticalScanGround : public GroundModel {
   float octant_offset_[8] = {}, octant_sign_[8] = {};  // atan2 = offset + sign * atan LUT
   ScratchBuffer<float> col_r_, col_h_;         // each column's representatives
   std::vector<float> col_w_;
-  std::vector<float> knot_height_;             // columns_ x knots_
+  // columns_ x knot_stride_ after kKnotPad floats, and kKnotPad after them: each column's
+  // knots_ knots and a spare one that stays 0 (kh[0] of the next column is 0 too), so that
+  // labelPoints() reads kh[k - 1 .. k + 2] of every knot k in one 16-byte load, kh[-1] = 0.
+  static constexpr std::size_t kKnotPad = 4;
+  int knot_stride_ = 0;
+  std::vector<float> knot_height_;
   std::vector<float> knot_support_;            // columns_ x knots_
-  std::vector<float> coupled_;                 // columns_ x knots_
+  std::vector<float> coupled_;                 // like knot_height_
+  std::vector<float> slope_coupled_;           // columns_
   std::vector<float> rep_;  // bin representatives' (r, height) pairs, r < 0: empty bin
   std::vector<float> column_slope_;            // straight estimate per column
   std::vector<int> column_support_;

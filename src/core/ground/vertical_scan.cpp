@@ -479,7 +479,8 @@ void VerticalScanGround::setParams(const VerticalScanParams& params) {
     knots_ = 2;  // a straight line: knot 1 at r = segment_length, extrapolated beyond
   }
   knots_used_ = knots_;
-  knot_height_.assign(static_cast<std::size_t>(columns_) * knots_, 0.f);
+  knot_stride_ = knots_ + 1;  // the spare knot after each column's stays 0 (= kh[0])
+  knot_height_.assign(static_cast<std::size_t>(columns_) * knot_stride_ + 2 * kKnotPad, 0.f);
   knot_support_.assign(knot_height_.size(), 0.f);
   coupled_.assign(knot_height_.size(), 0.f);
   column_slope_.assign(columns_, 0.f);
@@ -505,7 +506,7 @@ int VerticalScanGround::columnOf(float x, float y) const {
 }
 
 float VerticalScanGround::groundHeight(int col, float r) const {
-  vertical_scan::GroundLine line{&knot_height_[static_cast<std::size_t>(col) * knots_], knots_used_,
+  vertical_scan::GroundLine line{&knot_height_[kKnotPad + static_cast<std::size_t>(col) * knot_stride_], knots_used_,
                                  inv_segment_};
   return line.heightAt(r);
 }
@@ -945,10 +946,10 @@ void VerticalScanGround::fitColumns() {
   // feasible returns (occluded by a nearby obstacle) takes its neighbours' support-weighted
   // estimate.
   if (p.couple_columns && p.coupling_radius > 0) {
-    coupled_.resize(std::max<std::size_t>(coupled_.size(), columns_));
+    slope_coupled_.resize(columns_);
     for (int c = 0; c < columns_; ++c) {
       if (col_n[c] >= p.min_ground_returns) {
-        coupled_[c] = column_slope_[c];
+        slope_coupled_[c] = column_slope_[c];
         continue;
       }
       float sw = 0.f, sws = 0.f;
@@ -960,17 +961,17 @@ void VerticalScanGround::fitColumns() {
           sws += w * column_slope_[cc];
         }
       }
-      coupled_[c] = sw > 0.f ? sws / sw : column_slope_[c];
+      slope_coupled_[c] = sw > 0.f ? sws / sw : column_slope_[c];
     }
-    for (int c = 0; c < columns_; ++c) column_slope_[c] = coupled_[c];
+    for (int c = 0; c < columns_; ++c) column_slope_[c] = slope_coupled_[c];
   }
 
   // The ground line of each column, out to the scan's farthest return (knots_used_; the knots
   // beyond are not read).
-  const int K = knots_;
+  const int K = knot_stride_;  // the stride of a column's knots
   const int KU = knots_used_;
   for (int c = 0; c < columns_; ++c) {
-    float* kh = &knot_height_[static_cast<std::size_t>(c) * K];
+    float* kh = &knot_height_[kKnotPad + static_cast<std::size_t>(c) * K];
     float* ks = &knot_support_[static_cast<std::size_t>(c) * K];
     if (p.bend_ground_line) {
       vertical_scan::trackGroundLine(&col_r_[static_cast<std::size_t>(c) * rows],
@@ -996,16 +997,16 @@ void VerticalScanGround::fitColumns() {
     for (int c = 0; c < columns_; ++c) {
       for (int j = -RR; j <= RR; ++j) {
         const int cc = ((c + j) % columns_ + columns_) % columns_;
-        nb_height[j + RR] = &knot_height_[static_cast<std::size_t>(cc) * K];
+        nb_height[j + RR] = &knot_height_[kKnotPad + static_cast<std::size_t>(cc) * K];
         nb_support[j + RR] = &knot_support_[static_cast<std::size_t>(cc) * K];
       }
-      float* dst = &coupled_[static_cast<std::size_t>(c) * K];
+      float* dst = &coupled_[kKnotPad + static_cast<std::size_t>(c) * K];
       dst[0] = 0.f;
       int k = 1;
 #if defined(__SSE2__)
       // Four knots at a time; every lane sums over j in the same order as the loop below.
       {
-        const float* own_h = &knot_height_[static_cast<std::size_t>(c) * K];
+        const float* own_h = &knot_height_[kKnotPad + static_cast<std::size_t>(c) * K];
         const float* own_s = &knot_support_[static_cast<std::size_t>(c) * K];
         const __m128 v_keep = _mm_set1_ps(0.66f), v_eps = _mm_set1_ps(1e-3f);
         for (; k + 4 <= KU; k += 4) {
@@ -1027,7 +1028,7 @@ void VerticalScanGround::fitColumns() {
         // A knot within half a metre of the column's own ground return keeps its height.
         const std::size_t own = static_cast<std::size_t>(c) * K + k;
         if (knot_support_[own] >= 0.66f) {
-          dst[k] = knot_height_[own];
+          dst[k] = knot_height_[kKnotPad + own];
           continue;
         }
         float sw = 0.f, swh = 0.f;
@@ -1049,8 +1050,8 @@ void VerticalScanGround::labelPoints(GroundClassification* out) {
   const std::size_t n = bin_.size();
   const uint32_t rows = static_cast<uint32_t>(rows_);
   const int shift = row_shift_;
-  const int K = knots_;
-  const int last_k = K - 2;
+  const int K = knot_stride_;  // the stride of a column's knots
+  const int last_k = knots_ - 2;
   const float inv_seg = inv_segment_;
   const float thr = tol.obstacle_threshold;
   const bool negative = p.negative_obstacles;
@@ -1068,7 +1069,7 @@ void VerticalScanGround::labelPoints(GroundClassification* out) {
   const float s_base = tol.slope_error_max_base;
   const float s_per_m = tol.slope_error_max_per_m;
   const float* __restrict rep = rep_.data() + 2;  // rep[2b], rep[2b + 1]: bin b's r, height
-  const float* __restrict knots = knot_height_.data();
+  const float* __restrict knots = knot_height_.data() + kKnotPad;
   const uint32_t* __restrict bins = bin_.data();
   const float* __restrict rr = r_.data();
   const float* __restrict hh = height_.data();
@@ -1088,7 +1089,7 @@ void VerticalScanGround::labelPoints(GroundClassification* out) {
       const float sl = std::fabs(h - hi[1]) / (std::fabs(r - hi[0]) + 0.02f);
       local = local < 0.f ? sl : (sl < local ? sl : local);
     }
-    float v = local * inv_v_slope;
+    float v = local > 0.f ? local * inv_v_slope : 0.f;  // no row below or above: 0
     v = v < 1.f ? v : 1.f;
     const float pv = g * v;
     float best = pv > prob_i ? pv : prob_i;
@@ -1134,7 +1135,7 @@ void VerticalScanGround::labelPoints(GroundClassification* out) {
     alignas(16) int32_t knot_i[4];
     const __m128i v_row_mask = _mm_set1_epi32(static_cast<int>(rows - 1));
     const __m128i v_invalid_all = _mm_set1_epi32(-1);
-    const __m128 v_pad = _mm_set1_ps(0.02f), v_minus_one = _mm_set1_ps(-1.f);
+    const __m128 v_pad = _mm_set1_ps(0.02f);
     const __m128 v_inv_v_slope = _mm_set1_ps(inv_v_slope);
     const __m128 v_inv_foot = _mm_set1_ps(inv_foot);
     for (; i + 4 <= n; i += 4) {
@@ -1150,15 +1151,13 @@ void VerticalScanGround::labelPoints(GroundClassification* out) {
       const __m128 kf = _mm_min_ps(_mm_cvtepi32_ps(_mm_cvttps_epi32(f)), v_last_k);
       _mm_store_si128(reinterpret_cast<__m128i*>(knot_i),
                       _mm_andnot_si128(invalid, _mm_cvttps_epi32(_mm_add_ps(_mm_mul_ps(col, v_K), kf))));
-      // Each lane's knot pair (kh[k], kh[k + 1]) in one 8-byte load, then deinterleaved.
-      const __m128 pair01 = _mm_unpacklo_ps(
-          _mm_loadl_pi(v_zero, reinterpret_cast<const __m64*>(knots + knot_i[0])),
-          _mm_loadl_pi(v_zero, reinterpret_cast<const __m64*>(knots + knot_i[1])));
-      const __m128 pair23 = _mm_unpacklo_ps(
-          _mm_loadl_pi(v_zero, reinterpret_cast<const __m64*>(knots + knot_i[2])),
-          _mm_loadl_pi(v_zero, reinterpret_cast<const __m64*>(knots + knot_i[3])));
-      const __m128 k0 = _mm_movelh_ps(pair01, pair23);  // kh[k] of lanes 0..3
-      const __m128 k1 = _mm_movehl_ps(pair23, pair01);  // kh[k + 1] of lanes 0..3
+      // Each lane's kh[k - 1], kh[k], kh[k + 1] (and kh[k + 2]) in one 16-byte load, then
+      // transposed (the knot array is padded before and after: in bounds for every lane).
+      const __m128 q0 = _mm_loadu_ps(knots + knot_i[0] - 1), q1 = _mm_loadu_ps(knots + knot_i[1] - 1);
+      const __m128 q2 = _mm_loadu_ps(knots + knot_i[2] - 1), q3 = _mm_loadu_ps(knots + knot_i[3] - 1);
+      const __m128 t0 = _mm_unpacklo_ps(q0, q1), t1 = _mm_unpacklo_ps(q2, q3);
+      const __m128 k0 = _mm_movehl_ps(t1, t0);  // kh[k] of lanes 0..3
+      const __m128 k1 = _mm_movelh_ps(_mm_unpackhi_ps(q0, q1), _mm_unpackhi_ps(q2, q3));  // kh[k + 1]
       const __m128 ground = _mm_add_ps(k0, _mm_mul_ps(_mm_sub_ps(k1, k0), _mm_sub_ps(f, kf)));
       // Eqs 3.10, 3.11, 3.15 as below.
       __m128 gnd_error = _mm_sub_ps(ground, h);
@@ -1174,7 +1173,15 @@ void VerticalScanGround::labelPoints(GroundClassification* out) {
       if (vertical) {
         // g_foot (the height-above-the-foot factor; g itself without the foot term) gates both
         // terms; the GndError factor g is needed only where they run.
-        const __m128 above_foot = foot ? _mm_sub_ps(h, _mm_min_ps(k0, ground)) : _mm_xor_ps(gnd_error, v_sign);
+        __m128 above_foot;
+        if (foot) {
+          // The foot: the lowest of the line at r and the knots k and k - 1, as below.
+          // kh[k - 1] is the spare knot 0 before the column (kh[0] = 0) for k = 0.
+          const __m128 kp = _mm_movelh_ps(t0, t1);
+          above_foot = _mm_sub_ps(h, _mm_min_ps(_mm_min_ps(kp, k0), ground));
+        } else {
+          above_foot = _mm_xor_ps(gnd_error, v_sign);
+        }
         const __m128 g_foot = _mm_min_ps(_mm_mul_ps(above_foot, v_inv_v_gnd), v_one);
         // g_foot > thr && g_foot > P as one comparison.
         const __m128 need = _mm_cmpgt_ps(g_foot, _mm_max_ps(v_thr, p4v));
@@ -1187,49 +1194,52 @@ void VerticalScanGround::labelPoints(GroundClassification* out) {
           const __m128i bv = _mm_andnot_si128(invalid, b);
           alignas(16) uint32_t b4[4];
           _mm_store_si128(reinterpret_cast<__m128i*>(b4), bv);
-          const __m128 lo01 = _mm_unpacklo_ps(
-              _mm_loadl_pi(v_zero, reinterpret_cast<const __m64*>(rep + 2 * b4[0] - 2)),
-              _mm_loadl_pi(v_zero, reinterpret_cast<const __m64*>(rep + 2 * b4[1] - 2)));
-          const __m128 lo23 = _mm_unpacklo_ps(
-              _mm_loadl_pi(v_zero, reinterpret_cast<const __m64*>(rep + 2 * b4[2] - 2)),
-              _mm_loadl_pi(v_zero, reinterpret_cast<const __m64*>(rep + 2 * b4[3] - 2)));
           const __m128 hi01 = _mm_unpacklo_ps(
               _mm_loadl_pi(v_zero, reinterpret_cast<const __m64*>(rep + 2 * b4[0] + 2)),
               _mm_loadl_pi(v_zero, reinterpret_cast<const __m64*>(rep + 2 * b4[1] + 2)));
           const __m128 hi23 = _mm_unpacklo_ps(
               _mm_loadl_pi(v_zero, reinterpret_cast<const __m64*>(rep + 2 * b4[2] + 2)),
               _mm_loadl_pi(v_zero, reinterpret_cast<const __m64*>(rep + 2 * b4[3] + 2)));
-          const __m128 r_lo = _mm_movelh_ps(lo01, lo23), h_lo = _mm_movehl_ps(lo23, lo01);
           const __m128 r_hi = _mm_movelh_ps(hi01, hi23), h_hi = _mm_movehl_ps(hi23, hi01);
           const __m128i row = _mm_and_si128(bv, v_row_mask);
-          const __m128 has_lo = _mm_and_ps(_mm_castsi128_ps(_mm_cmpgt_epi32(row, _mm_setzero_si128())),
-                                           _mm_cmpge_ps(r_lo, v_zero));
           const __m128 has_hi = _mm_and_ps(_mm_castsi128_ps(_mm_cmplt_epi32(row, v_row_mask)),
                                            _mm_cmpge_ps(r_hi, v_zero));
-          const __m128 sl_lo = _mm_div_ps(_mm_and_ps(_mm_sub_ps(h, h_lo), v_abs),
-                                          _mm_add_ps(_mm_and_ps(_mm_sub_ps(r, r_lo), v_abs), v_pad));
           // |h - h_hi| / d is |(h_hi - h) / d| exactly (d > 0; IEEE division is symmetric in
           // sign): the rise to the row above serves both terms.
           const __m128 rise = _mm_div_ps(_mm_sub_ps(h_hi, h),
                                          _mm_add_ps(_mm_and_ps(_mm_sub_ps(r, r_hi), v_abs), v_pad));
-          const __m128 sl_hi = _mm_and_ps(rise, v_abs);
-          // Both: the smaller (minps(sl_hi, sl_lo) = sl_hi < sl_lo ? sl_hi : sl_lo); one of
-          // them: that one; neither: -1.
-          const __m128 one_side = _mm_or_ps(_mm_and_ps(has_lo, sl_lo),
-                                            _mm_andnot_ps(has_lo, _mm_or_ps(_mm_and_ps(has_hi, sl_hi),
-                                                                            _mm_andnot_ps(has_hi, v_minus_one))));
-          const __m128 both = _mm_and_ps(has_lo, has_hi);
-          const __m128 local = _mm_or_ps(_mm_and_ps(both, _mm_min_ps(sl_hi, sl_lo)),
-                                         _mm_andnot_ps(both, one_side));
-          const __m128 v = _mm_min_ps(_mm_mul_ps(local, v_inv_v_slope), v_one);
           // pv > prob ? pv : prob is maxps(pv, prob).
-          __m128 with_pv = _mm_max_ps(_mm_mul_ps(g, v), p4v);
+          __m128 best = p4v;
           if (foot) {
             // The foot of a face (vertical_probability()), where the row above exists.
             const __m128 u = _mm_min_ps(_mm_mul_ps(rise, v_inv_foot), v_one);
-            const __m128 with_pf = _mm_max_ps(_mm_mul_ps(g_foot, u), with_pv);
-            with_pv = _mm_or_ps(_mm_and_ps(has_hi, with_pf), _mm_andnot_ps(has_hi, with_pv));
+            best = _mm_or_ps(_mm_and_ps(has_hi, _mm_max_ps(_mm_mul_ps(g_foot, u), p4v)), _mm_andnot_ps(has_hi, p4v));
           }
+          // P_vertical = g * v <= g (v in [0, 1]) raises P only where g exceeds it so far; the
+          // row below is read only there.
+          if (_mm_movemask_ps(_mm_cmpgt_ps(g, best)) & need_bits) {
+            const __m128 lo01 = _mm_unpacklo_ps(
+                _mm_loadl_pi(v_zero, reinterpret_cast<const __m64*>(rep + 2 * b4[0] - 2)),
+                _mm_loadl_pi(v_zero, reinterpret_cast<const __m64*>(rep + 2 * b4[1] - 2)));
+            const __m128 lo23 = _mm_unpacklo_ps(
+                _mm_loadl_pi(v_zero, reinterpret_cast<const __m64*>(rep + 2 * b4[2] - 2)),
+                _mm_loadl_pi(v_zero, reinterpret_cast<const __m64*>(rep + 2 * b4[3] - 2)));
+            const __m128 r_lo = _mm_movelh_ps(lo01, lo23), h_lo = _mm_movehl_ps(lo23, lo01);
+            const __m128 has_lo = _mm_and_ps(_mm_castsi128_ps(_mm_cmpgt_epi32(row, _mm_setzero_si128())),
+                                             _mm_cmpge_ps(r_lo, v_zero));
+            const __m128 sl_lo = _mm_div_ps(_mm_and_ps(_mm_sub_ps(h, h_lo), v_abs),
+                                            _mm_add_ps(_mm_and_ps(_mm_sub_ps(r, r_lo), v_abs), v_pad));
+            const __m128 sl_hi = _mm_and_ps(rise, v_abs);
+            // Both: the smaller (minps(sl_hi, sl_lo) = sl_hi < sl_lo ? sl_hi : sl_lo); one of
+            // them: that one; neither: 0.
+            const __m128 one_side = _mm_or_ps(_mm_and_ps(has_lo, sl_lo), _mm_andnot_ps(has_lo, _mm_and_ps(has_hi, sl_hi)));
+            const __m128 both = _mm_and_ps(has_lo, has_hi);
+            const __m128 local = _mm_or_ps(_mm_and_ps(both, _mm_min_ps(sl_hi, sl_lo)),
+                                           _mm_andnot_ps(both, one_side));
+            const __m128 v = _mm_min_ps(_mm_mul_ps(local, v_inv_v_slope), v_one);
+            best = _mm_max_ps(_mm_mul_ps(g, v), best);
+          }
+          const __m128 with_pv = best;
           const __m128 take = _mm_and_ps(need, _mm_castsi128_ps(_mm_andnot_si128(invalid, v_invalid_all)));
           p4v = _mm_or_ps(_mm_and_ps(take, with_pv), _mm_andnot_ps(take, p4v));
         }
@@ -1270,13 +1280,14 @@ void VerticalScanGround::labelPoints(GroundClassification* out) {
     if (vertical) {
       // P_vertical = max(GndError factor * local slope factor, height above the foot factor *
       // rise to the row above factor), evaluated only where it can reach the threshold (the
-      // foot's height factor, never below the GndError one, exceeds it). The foot is the lower
-      // of the line and its knot before r: where the piecewise line smears a step over a
+      // foot's height factor, never below the GndError one, exceeds it). The foot is the lowest
+      // of the line and its two knots before r: where the piecewise line smears a step over a
       // segment (a curb face, the bottom of a car's side), the height above the ground in
-      // front of the step.
+      // front of the step, also when a knot falls between the last ground return and the face.
       float g = -gnd_error * inv_v_gnd;
       g = g < 1.f ? g : 1.f;
-      const float foot_h = kh[k] < ground ? kh[k] : ground;
+      const float fk = k > 0 && kh[k - 1] < kh[k] ? kh[k - 1] : kh[k];
+      const float foot_h = fk < ground ? fk : ground;
       float g_foot = foot ? (h - foot_h) * inv_v_gnd : g;
       g_foot = g_foot < 1.f ? g_foot : 1.f;
       if (g_foot > thr && g_foot > prob_i) prob_i = vertical_probability(b, r, h, g, g_foot, prob_i);
