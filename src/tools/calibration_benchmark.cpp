@@ -37,7 +37,8 @@ void usage() {
          "--set NAME=VALUE: a refinement or sweep parameter (experiments): max_target_points,\n"
          "  target_voxel, reference_voxel, huber, normal_neighbours, max_correspondence_end,\n"
          "  max_iterations, plane_sweep_iterations, plane_sweep_passes, plane_sweep_coarse_points,\n"
-         "  plane_sweep_fine_points, plane_sweep_fine_iterations, sparse_extrapolation_steps, coarse_restarts\n"
+         "  plane_sweep_fine_points, plane_sweep_fine_iterations, sparse_extrapolation_steps,\n"
+         "  sparse_final_iterations, coarse_restarts\n"
          "--only T: run trial T alone (0-based; the same data and seeds as in the full run)\n"
          "--drive-speed: the vehicle's speed between poses; a 2D ladar scans at its own rate\n"
          "  along the way (default 2 m/s; 0 = 20 scans per segment, the old set-up)\n"
@@ -431,6 +432,7 @@ int main(int argc, char** argv) {
     else if (k == "plane_sweep_fine_points") params.plane_sweep_fine_points = static_cast<int>(v);
     else if (k == "plane_sweep_fine_iterations") params.plane_sweep_fine_iterations = static_cast<int>(v);
     else if (k == "sparse_extrapolation_steps") params.sparse_extrapolation_steps = static_cast<int>(v);
+    else if (k == "sparse_final_iterations") params.sparse_final_iterations = static_cast<int>(v);
     else if (k == "coarse_restarts") params.coarse_restarts = static_cast<int>(v);
     else {
       std::cerr << "unknown --set parameter " << k << "\n";

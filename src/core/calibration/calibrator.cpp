@@ -413,6 +413,20 @@ CalibrationResult calibrate(const CalibrationInput& input, const CalibrationPara
     }
     out.trace.push_back(estimate);
   }
+  // The coarse search settled where no member of the sweep stays possible (every refinement of
+  // one left the search region or laid the scan plane flat): a wrong basin. The full refinement
+  // from there would only walk off (2-3 m, ~5 s CPU) before the restart below; the coarse search
+  // restarts now instead. (Its last attempt still goes on, so that the failure is reported.)
+  if (!cancelled && params.method == "coarse_to_fine" && sparse && params.plane_sweep_steps > 0 &&
+      out.plane_sweep.empty() && params.coarse_restarts > 0) {
+    CalibrationParams again = params;
+    again.coarse_restarts = params.coarse_restarts - 1;
+    again.search.seed = params.search.seed + 1;
+    CalibrationResult retry = calibrate(input, again, progress);
+    retry.evaluations += out.evaluations;
+    retry.restarts += 1;
+    return finish(retry);
+  }
   if (!cancelled && (refine_only || params.method == "coarse_to_fine")) {
     RefinementParams rp = params.refinement;
     if (sparse && !out.plane_sweep.empty()) {
