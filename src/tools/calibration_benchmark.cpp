@@ -33,7 +33,13 @@ void usage() {
          "         [--method NAME] [--trials N] [--seed S] [--world NAME] [--json OUT]\n"
          "         [--plot OUT.png] [--noise table4.1|datasheet|none] [--poses N]\n"
          "         [--bin M] [--repeatability W] [--centre X,Y] [--disk] [--probe M] [--quiet]\n"
-         "         [--drive-speed M_PER_S] [--sparse-noise-floor M] [--diagnose]\n"
+         "         [--drive-speed M_PER_S] [--sparse-noise-floor M] [--diagnose] [--only T]\n"
+         "--set NAME=VALUE: a refinement or sweep parameter (experiments): max_target_points,\n"
+         "  target_voxel, reference_voxel, huber, normal_neighbours, max_correspondence_end,\n"
+         "  max_iterations, plane_sweep_iterations, plane_sweep_passes, plane_sweep_coarse_points,\n"
+         "  plane_sweep_fine_points, plane_sweep_fine_iterations, sparse_extrapolation_steps,\n"
+         "  sparse_final_iterations, coarse_restarts\n"
+         "--only T: run trial T alone (0-based; the same data and seeds as in the full run)\n"
          "--drive-speed: the vehicle's speed between poses; a 2D ladar scans at its own rate\n"
          "  along the way (default 2 m/s; 0 = 20 scans per segment, the old set-up)\n"
          "--sparse-noise-floor: 2D targets' residual weighting by the reference's local noise\n"
@@ -189,6 +195,20 @@ void printDiagnosis(const cal::ExperimentTrial& trial, const cal::CalibrationPar
     std::printf("          ground-line sweep (rotation rad: cost):");
     for (const auto& c : r.plane_sweep) std::printf(" %+.2f:%.5f", c.first, c.second);
     std::printf("\n");
+    if (r.search.trace.size() < r.trace.size()) {
+      const cal::Pose6 swept = cal::poseDifference(r.trace[r.search.trace.size()], trial.truth);
+      std::printf("          final refinement: %d iterations, %s\n", r.refinement.iterations,
+                  r.refinement.converged ? "converged" : "not converged");
+      std::printf("          final refinement's x, y error per iteration:");
+      for (const cal::Pose6& p : r.refinement.trace) {
+        const cal::Pose6 e = cal::poseDifference(p, trial.truth);
+        std::printf(" %+.3f,%+.3f", e[0], e[1]);
+      }
+      std::printf("\n");
+      std::printf("          after the sweep error: x %+.3f y %+.3f z %+.3f m, roll %+.4f "
+                  "pitch %+.4f yaw %+.4f rad\n",
+                  swept[0], swept[1], swept[2], swept[3], swept[4], swept[5]);
+    }
   }
   cal::PointVector reference;
   cal::accumulate(trial.input.reference, trial.input.reference_extrinsic, &reference);
@@ -198,6 +218,79 @@ void printDiagnosis(const cal::ExperimentTrial& trial, const cal::CalibrationPar
   const cal::ScanSet target = cal::refinementTarget(t, params.refinement);
   printHessian("at the truth", model, target, trial.truth, params);
   printHessian("at the solution", model, target, r.extrinsic, params);
+  // The calibrator's own costs (its 2D-target weighting): the final refinement's and the sweep's.
+  cal::RefinementParams final_rp = params.refinement;
+  if (cal::isSparseTarget(t, params)) {
+    final_rp.keep_edges = params.sparse_keep_edges || final_rp.keep_edges;
+    if (params.sparse_noise_floor > 0) final_rp.noise_floor = params.sparse_noise_floor;
+    cal::SurfaceModel sparse_model;
+    sparse_model.build(reference, final_rp);
+    cal::RefinementParams scored = final_rp;
+    scored.range_noise = params.sparse_range_noise;
+    scored.reference_noise = params.sparse_reference_noise;
+    const double end = final_rp.max_correspondence_end;
+    const auto costs = [&](const cal::Pose6& p, double* c_final, double* c_scored) {
+      *c_final = cal::sparseTargetCost(cal::linearise(sparse_model, target, p, end, final_rp),
+                                       target.numPoints(), final_rp);
+      *c_scored = cal::sparseTargetCost(cal::linearise(sparse_model, target, p, end, scored),
+                                        target.numPoints(), scored);
+    };
+    double ft, st, fs, ss;
+    costs(trial.truth, &ft, &st);
+    costs(r.extrinsic, &fs, &ss);
+    std::printf("          calibrator's costs (final refinement's weighting / sweep's): at the truth "
+                "%.6f / %.6f, at the solution %.6f / %.6f\n", ft, st, fs, ss);
+    // The truth refined with the final refinement's settings: where that cost's minimum lies.
+    cal::RefinementParams rp = final_rp;
+    rp.max_correspondence_start = rp.max_correspondence_end;
+    const cal::Pose6 m = cal::poseDifference(
+        cal::refine(sparse_model, target, trial.truth, rp).extrinsic, trial.truth);
+    std::printf("          final refinement started at the truth ends at error: x %+.3f y %+.3f "
+                "z %+.3f m, roll %+.4f pitch %+.4f yaw %+.4f rad\n",
+                m[0], m[1], m[2], m[3], m[4], m[5]);
+    if (cal::groundLineStepDirection(trial.truth, params.ground_z, &rp.frozen_direction)) {
+      const cal::Pose6 mf = cal::poseDifference(
+          cal::refine(sparse_model, target, trial.truth, rp).extrinsic, trial.truth);
+      std::printf("          same with the ground-line rotation held (as after the sweep): x %+.3f "
+                  "y %+.3f z %+.3f m, roll %+.4f pitch %+.4f yaw %+.4f rad\n",
+                  mf[0], mf[1], mf[2], mf[3], mf[4], mf[5]);
+    }
+    {
+      // The sweep's score along the family through the truth, each member fully refined
+      // (30 iterations) with its rotation held: where the score itself puts the minimum.
+      std::printf("          sweep score along the family at the truth, members refined fully:");
+      std::vector<double> as, cs;
+      for (double a = -0.008; a <= 0.00801; a += 0.004) {
+        cal::Pose6 start;
+        if (!cal::rotateAboutGroundLine(trial.truth, a, params.ground_z, &start)) continue;
+        cal::RefinementParams hp = final_rp;
+        hp.max_correspondence_start = hp.max_correspondence_end;
+        if (!cal::groundLineStepDirection(start, params.ground_z, &hp.frozen_direction)) continue;
+        const cal::Pose6 refined = cal::refine(sparse_model, target, start, hp).extrinsic;
+        const double c = cal::sparseTargetCost(cal::linearise(sparse_model, target, refined, end, scored),
+                                               target.numPoints(), scored);
+        const cal::Pose6 e = cal::poseDifference(refined, trial.truth);
+        std::printf(" %+.3f:%.6f(x%+.3f,y%+.3f)", a, c, e[0], e[1]);
+        as.push_back(a);
+        cs.push_back(c);
+      }
+      if (as.size() == 5) {  // least-squares parabola
+        Eigen::Matrix<double, 5, 3> m;
+        Eigen::Matrix<double, 5, 1> b;
+        for (int i = 0; i < 5; ++i) { m(i, 0) = as[i] * as[i]; m(i, 1) = as[i]; m(i, 2) = 1; b[i] = cs[i]; }
+        const Eigen::Vector3d q = m.colPivHouseholderQr().solve(b);
+        std::printf("; parabola minimum %+.4f", q[0] > 0 ? -q[1] / (2 * q[0]) : NAN);
+      }
+      std::printf("\n");
+    }
+    rp = scored;
+    rp.max_correspondence_start = rp.max_correspondence_end;
+    const cal::Pose6 ms = cal::poseDifference(
+        cal::refine(sparse_model, target, trial.truth, rp).extrinsic, trial.truth);
+    std::printf("          same with the sweep's weighting ends at error: x %+.3f y %+.3f "
+                "z %+.3f m, roll %+.4f pitch %+.4f yaw %+.4f rad\n",
+                ms[0], ms[1], ms[2], ms[3], ms[4], ms[5]);
+  }
   std::printf("          observability at the solution: scaled eigenvalues");
   for (int i = 0; i < 6; ++i) std::printf(" %.3g", r.observability.eigenvalues[i]);
   std::printf("; stddev");
@@ -210,11 +303,12 @@ void printDiagnosis(const cal::ExperimentTrial& trial, const cal::CalibrationPar
 int main(int argc, char** argv) {
   std::string pair_name = "velodyne-velodyne", method = cal::defaultMethod(), world_name = "thesis";
   std::string json_path, plot_path, noise_name = "table4.1";
-  int trials = 10, poses = 10, windows = 0;
+  int trials = 10, poses = 10, windows = 0, only = -1;
   uint64_t seed = 1;
   double bin = -1, probe = -1, centre_x = 0, centre_y = 0;
   bool centre_given = false, corridor_given = false;
   bool quiet = false, diagnose = false;
+  std::vector<std::pair<std::string, double>> settings;
   double drive_speed = cal::ExperimentOptions().drive_speed;
   double sparse_noise_floor = cal::CalibrationParams().sparse_noise_floor;
   double sparse_range_noise = cal::CalibrationParams().sparse_range_noise;
@@ -243,6 +337,13 @@ int main(int argc, char** argv) {
       else if (a == "--repeatability") windows = std::stoi(value("--repeatability"));
       else if (a == "--quiet") quiet = true;
       else if (a == "--diagnose") diagnose = true;
+      else if (a == "--only") only = std::stoi(value("--only"));
+      else if (a == "--set") {
+        const std::string v = value("--set");
+        const std::size_t eq = v.find('=');
+        if (eq == std::string::npos) throw std::invalid_argument("set");
+        settings.emplace_back(v.substr(0, eq), std::stod(v.substr(eq + 1)));
+      }
       else if (a == "--drive-speed") drive_speed = std::stod(value("--drive-speed"));
       else if (a == "--sparse-noise-floor") sparse_noise_floor = std::stod(value("--sparse-noise-floor"));
       else if (a == "--sparse-range-noise") sparse_range_noise = std::stod(value("--sparse-range-noise"));
@@ -268,6 +369,10 @@ int main(int argc, char** argv) {
   if (!cal::isMethod(method)) {
     std::cerr << "unknown method '" << method << "'\n";
     usage();
+    return 2;
+  }
+  if (only >= trials) {
+    std::cerr << "--only must be below --trials\n";
     return 2;
   }
   if (trials < 1 || poses < 1) {
@@ -311,6 +416,29 @@ int main(int argc, char** argv) {
   params.sparse_noise_floor = sparse_noise_floor;
   params.sparse_range_noise = sparse_range_noise;
   params.sparse_reference_noise = sparse_reference_noise;
+  for (const auto& kv : settings) {
+    const std::string& k = kv.first;
+    const double v = kv.second;
+    if (k == "max_target_points") params.refinement.max_target_points = static_cast<int>(v);
+    else if (k == "target_voxel") params.refinement.target_voxel = v;
+    else if (k == "reference_voxel") params.refinement.reference_voxel = v;
+    else if (k == "huber") params.refinement.huber = v;
+    else if (k == "normal_neighbours") params.refinement.normal_neighbours = static_cast<int>(v);
+    else if (k == "max_correspondence_end") params.refinement.max_correspondence_end = v;
+    else if (k == "max_iterations") params.refinement.max_iterations = static_cast<int>(v);
+    else if (k == "plane_sweep_iterations") params.plane_sweep_iterations = static_cast<int>(v);
+    else if (k == "plane_sweep_passes") params.plane_sweep_passes = static_cast<int>(v);
+    else if (k == "plane_sweep_coarse_points") params.plane_sweep_coarse_points = static_cast<int>(v);
+    else if (k == "plane_sweep_fine_points") params.plane_sweep_fine_points = static_cast<int>(v);
+    else if (k == "plane_sweep_fine_iterations") params.plane_sweep_fine_iterations = static_cast<int>(v);
+    else if (k == "sparse_extrapolation_steps") params.sparse_extrapolation_steps = static_cast<int>(v);
+    else if (k == "sparse_final_iterations") params.sparse_final_iterations = static_cast<int>(v);
+    else if (k == "coarse_restarts") params.coarse_restarts = static_cast<int>(v);
+    else {
+      std::cerr << "unknown --set parameter " << k << "\n";
+      return 2;
+    }
+  }
 
   std::printf("pair %s (target %s against reference %s), world %s, method %s, %d trials, seed %llu, "
               "poses around (%.1f, %.1f)\n",
@@ -327,6 +455,7 @@ int main(int argc, char** argv) {
   std::vector<std::vector<cal::Pose6>> traces;
   int successes = 0;
   for (int t = 0; t < trials; ++t) {
+    if (only >= 0 && t != only) continue;
     cal::ExperimentTrial trial;
     if (!cal::makeTrial(world, pair, options, seed * 1000003ULL + t, &trial, &error)) {
       std::cerr << "trial " << t << ": simulation failed: " << error << "\n";

@@ -81,7 +81,19 @@ struct CalibrationParams {
   // around the best member (2 new members each); a parabola through the last pass's best member
   // and its neighbours places the minimum. (4 passes: 0.00625 rad, ~6 cm in z for a SICK meeting
   // the ground 10 m away; the previous 2 passes of 5 ended at 0.025 rad, 0.25 m.)
-  int plane_sweep_passes = 4;
+  int plane_sweep_passes = 3;
+  // The first pass refines its members on the target evenly thinned to this many points (0 = the
+  // refinement's target), plain Gauss-Newton; the later passes' members are refined on the
+  // target thinned to plane_sweep_fine_points for plane_sweep_fine_iterations, their steps extrapolated (sparse_extrapolation_steps)
+  // so that x and y converge: unconverged members scored up to 0.005 rad off the profile's
+  // minimum, and x 4-8 cm off with it.
+  int plane_sweep_walks = 3;  // extra passes at the same spacing while the best is at an edge
+  int plane_sweep_coarse_points = 12000;
+  int plane_sweep_fine_points = 0;
+  int plane_sweep_fine_iterations = 6;
+  // 2D targets: the final refinement after the sweep (started from its converged member) stops
+  // after this many iterations (0 = the refinement's max_iterations).
+  int sparse_final_iterations = 20;
   double ground_z = 0.0;             // the ground's height in base_link [m]
   // 2D targets: hypotheses whose scan plane meets the ground within target_max_range at less than
   // this incidence are impossible (grazesGround, scan_plane.h) and score infinity. 0 = off.
@@ -97,6 +109,9 @@ struct CalibrationParams {
   // favours a flatter scan plane: z 5-17 cm low at Table 4.1 noise).
   double sparse_range_noise = 0.1;        // [m] (LMS-291, Table 4.1)
   double sparse_reference_noise = 0.0025; // [m]
+  // 2D targets: the refinements (the sweep's members and the final one) extrapolate their steps
+  // along the weak directions (RefinementParams::extrapolation_steps).
+  int sparse_extrapolation_steps = 5;
 };
 
 // The thesis's particle filter settings (4.4.4, 5.2.1 tuned): 3 m bins, 100 hypotheses per step,

@@ -146,11 +146,7 @@ bool isSparseTarget(const ScanSet& target, const CalibrationParams& params) {
 double sparseTargetCost(const Linearisation& lin, std::size_t target_points,
                         const RefinementParams& params) {
   if (target_points == 0) return std::numeric_limits<double>::infinity();
-  const double cap = params.max_correspondence_end;
-  const double miss = cap <= params.huber ? 0.5 * cap * cap : params.huber * (cap - 0.5 * params.huber);
-  const long n = std::min<long>(lin.correspondences, static_cast<long>(target_points));
-  const double sum = n > 0 ? lin.cost * static_cast<double>(n) : 0.0;
-  return (sum + miss * static_cast<double>(target_points - n)) / static_cast<double>(target_points);
+  return robustCostOverAll(lin, target_points, params.max_correspondence_end, params.huber);
 }
 
 namespace {
@@ -250,6 +246,7 @@ CalibrationResult calibrate(const CalibrationInput& input, const CalibrationPara
   const bool sparse = isSparseTarget(input.target, params);
   if (sparse && params.sparse_keep_edges) params.refinement.keep_edges = true;
   if (sparse && params.sparse_noise_floor > 0) params.refinement.noise_floor = params.sparse_noise_floor;
+  if (sparse) params.refinement.extrapolation_steps = params.sparse_extrapolation_steps;
   PointVector reference;
   accumulate(input.reference, input.reference_extrinsic, &reference);
   reference = voxelDownsample(reference, params.refinement.reference_voxel);
@@ -266,6 +263,23 @@ CalibrationResult calibrate(const CalibrationInput& input, const CalibrationPara
     RefinementParams brief = params.refinement;
     brief.max_iterations = std::max(1, params.plane_sweep_iterations);
     brief.max_correspondence_start = std::min(brief.max_correspondence_start, 1.0);
+    // The first pass only tells the 0.05 rad bins apart (costs 20-100 % apart): a thinner target
+    // and plain Gauss-Newton. The later passes compare members a few per cent apart, so their
+    // members are refined to convergence in x and y (extrapolated steps, started at the end
+    // correspondence distance from the previous pass's converged best member).
+    brief.extrapolation_steps = 0;
+    RefinementParams fine = params.refinement;
+    fine.max_iterations = std::max(1, params.plane_sweep_fine_iterations);
+    fine.max_correspondence_start = fine.max_correspondence_end;
+    RefinementParams coarse_rp = params.refinement;
+    coarse_rp.max_target_points = params.plane_sweep_coarse_points > 0
+                                      ? params.plane_sweep_coarse_points
+                                      : coarse_rp.max_target_points;
+    const ScanSet coarse_target = refinementTarget(input.target, coarse_rp);
+    RefinementParams fine_rp = params.refinement;
+    fine_rp.max_target_points = params.plane_sweep_fine_points > 0 ? params.plane_sweep_fine_points
+                                                                   : fine_rp.max_target_points;
+    const ScanSet fine_target = refinementTarget(input.target, fine_rp);
     const auto possible = [&](const Pose6& p) {
       return insideRegion(p, params) &&
              !grazesGround(p, params.ground_z, params.min_ground_incidence,
@@ -279,77 +293,145 @@ CalibrationResult calibrate(const CalibrationInput& input, const CalibrationPara
     scored.reference_noise = params.sparse_reference_noise;
     // Refines a member with its ground-line rotation frozen and scores it; infinity when
     // impossible.
-    const auto member = [&](const Pose6& start_pose, Pose6* refined) {
+    const auto member = [&](const Pose6& start_pose, bool fine_pass, Pose6* refined) {
       if (!possible(start_pose)) return std::numeric_limits<double>::infinity();
-      RefinementParams rp = brief;
+      RefinementParams rp = fine_pass ? fine : brief;
+      const ScanSet& points = fine_pass ? fine_target : coarse_target;
       if (!groundLineStepDirection(start_pose, params.ground_z, &rp.frozen_direction)) {
         rp.frozen_direction.setZero();
       }
-      const RefinementResult r = refine(model, target, start_pose, rp, progress);
+      const RefinementResult r = refine(model, points, start_pose, rp, progress);
       cancelled = cancelled || r.cancelled;
       out.evaluations += r.iterations;
       *refined = r.extrinsic;
       if (!possible(r.extrinsic)) return std::numeric_limits<double>::infinity();
       const Linearisation at = scored.range_noise > 0
-                                   ? linearise(model, target, r.extrinsic,
+                                   ? linearise(model, points, r.extrinsic,
                                                scored.max_correspondence_end, scored)
                                    : r.at_solution;
-      return sparseTargetCost(at, target.numPoints(), scored);
+      return sparseTargetCost(at, points.numPoints(), scored);
     };
     // The coarse estimate's other DOFs converged first (with the rotation frozen), so that the
     // members differ by the rotation only; then plane_sweep_passes passes: the whole range, then
     // each over the best member and the two halfway to its neighbours of the previous pass (a
-    // bisection; the best member's cost is kept), started from that member; a parabola through
-    // the last pass's three places the minimum.
+    // bisection; the best member's cost is kept), started from that member, or at the same
+    // spacing while the best is at the pass's edge; a least-squares parabola through all the
+    // later passes' members places the minimum.
     {
       Pose6 refined;
-      if (std::isfinite(member(estimate, &refined))) estimate = refined;
+      if (std::isfinite(member(estimate, false, &refined))) estimate = refined;
     }
     int steps = std::max(1, params.plane_sweep_steps);
     double range = params.plane_sweep_range;
     double kept_cost = std::numeric_limits<double>::infinity();  // the best member's so far
-    const int passes = std::max(1, params.plane_sweep_passes);
+    int passes = std::max(1, params.plane_sweep_passes);
+    int walks = 0;
+    // The later passes' members (converged in the other DOFs, on the same target), by their
+    // rotation from the first pass's best member: the profile the minimum is placed in.
+    struct Profiled {
+      double angle, cost;
+      Pose6 pose;
+    };
+    std::vector<Profiled> profile;
+    double base = 0.0;  // the rotation of `estimate` from the first pass's best member
     for (int pass = 0; pass < passes && !cancelled; ++pass) {
       const double spacing = steps == 1 ? 0.0 : 2.0 * range / (steps - 1);
       std::vector<double> costs(steps, std::numeric_limits<double>::infinity());
       std::vector<Pose6> members(steps, estimate);
+      std::vector<double> angles(steps, 0.0);
       int best_k = -1;
       for (int k = 0; k < steps && !cancelled; ++k) {
         const double angle = steps == 1 ? 0.0 : -range + k * spacing;
+        angles[k] = angle;
         Pose6 candidate = estimate;
         if (angle != 0.0 && !rotateAboutGroundLine(estimate, angle, params.ground_z, &candidate)) {
           continue;
         }
-        costs[k] = angle == 0.0 && pass > 0 ? kept_cost : member(candidate, &members[k]);
+        // The best member's cost is kept from the previous pass of the same kind (the first
+        // pass scores the thinner target: its best member is refined again on the fine one).
+        bool kept = angle == 0.0 && pass > 1;
+        if (kept) costs[k] = kept_cost;
+        for (const Profiled& m : profile) {  // a walking pass meets members already refined
+          if (pass > 0 && !kept && std::abs(m.angle - (base + angle)) < 1e-9) {
+            costs[k] = m.cost;
+            members[k] = m.pose;
+            kept = true;
+          }
+        }
+        if (!kept) costs[k] = member(candidate, pass > 0, &members[k]);
         if (std::isfinite(costs[k])) out.plane_sweep.emplace_back(angle, costs[k]);
+        if (pass > 0 && !kept && std::isfinite(costs[k])) {
+          profile.push_back({base + angle, costs[k], members[k]});
+        }
         if (std::isfinite(costs[k]) && (best_k < 0 || costs[k] < costs[best_k])) best_k = k;
       }
       if (best_k < 0 || cancelled) break;
       estimate = members[best_k];
       kept_cost = costs[best_k];
-      if (pass == passes - 1 && pass > 0 && best_k > 0 && best_k + 1 < steps &&
-          std::isfinite(costs[best_k - 1]) && std::isfinite(costs[best_k + 1])) {
-        const double cm = costs[best_k - 1], c0 = costs[best_k], cp = costs[best_k + 1];
-        const double denom = cm - 2.0 * c0 + cp;
-        if (denom > 0) {
-          const double offset = std::max(-1.0, std::min(1.0, 0.5 * (cm - cp) / denom)) * spacing;
-          Pose6 moved, refined;
-          if (offset != 0.0 &&
-              rotateAboutGroundLine(members[best_k], offset, params.ground_z, &moved) &&
-              std::isfinite(member(moved, &refined))) {
-            estimate = refined;
-          }
-        }
+      if (pass > 0) base += angles[best_k];
+      // A later pass whose best member is at its edge has not bracketed the minimum (the first
+      // pass chose its bin from members not yet converged): it walks on at the same spacing,
+      // at most plane_sweep_walks times, instead of halving it.
+      if (pass > 0 && (best_k == 0 || best_k + 1 == steps) && walks < params.plane_sweep_walks) {
+        ++walks;
+        ++passes;
+        continue;
       }
       range = 0.5 * spacing;
       steps = 3;
     }
+    // The minimum of the least-squares parabola through the whole fine profile (not only the
+    // last pass's three members: the members differ by a few 1e-5 of a cost of ~1e-3, about
+    // their own noise, and the three alone put the minimum up to 0.007 rad off).
+    if (!cancelled && profile.size() >= 4) {
+      Eigen::Matrix3d ata = Eigen::Matrix3d::Zero();
+      Eigen::Vector3d atb = Eigen::Vector3d::Zero();
+      double lo = profile[0].angle, hi = lo;
+      for (const Profiled& m : profile) {
+        const Eigen::Vector3d row(m.angle * m.angle, m.angle, 1.0);
+        ata += row * row.transpose();
+        atb += m.cost * row;
+        lo = std::min(lo, m.angle);
+        hi = std::max(hi, m.angle);
+      }
+      const Eigen::Vector3d abc = ata.ldlt().solve(atb);
+      if (abc.allFinite() && abc[0] > 0) {
+        const double minimum = std::max(lo, std::min(hi, -0.5 * abc[1] / abc[0]));
+        const Profiled* nearest = &profile[0];
+        for (const Profiled& m : profile) {
+          if (std::abs(m.angle - minimum) < std::abs(nearest->angle - minimum)) nearest = &m;
+        }
+        Pose6 moved, refined;
+        if (std::abs(minimum - nearest->angle) < 1e-6) {
+          estimate = nearest->pose;
+        } else if (rotateAboutGroundLine(nearest->pose, minimum - nearest->angle, params.ground_z,
+                                         &moved) &&
+                   std::isfinite(member(moved, true, &refined))) {
+          estimate = refined;
+        }
+      }
+    }
     out.trace.push_back(estimate);
+  }
+  // The coarse search settled where no member of the sweep stays possible (every refinement of
+  // one left the search region or laid the scan plane flat): a wrong basin. The full refinement
+  // from there would only walk off (2-3 m, ~5 s CPU) before the restart below; the coarse search
+  // restarts now instead. (Its last attempt still goes on, so that the failure is reported.)
+  if (!cancelled && params.method == "coarse_to_fine" && sparse && params.plane_sweep_steps > 0 &&
+      out.plane_sweep.empty() && params.coarse_restarts > 0) {
+    CalibrationParams again = params;
+    again.coarse_restarts = params.coarse_restarts - 1;
+    again.search.seed = params.search.seed + 1;
+    CalibrationResult retry = calibrate(input, again, progress);
+    retry.evaluations += out.evaluations;
+    retry.restarts += 1;
+    return finish(retry);
   }
   if (!cancelled && (refine_only || params.method == "coarse_to_fine")) {
     RefinementParams rp = params.refinement;
     if (sparse && !out.plane_sweep.empty()) {
       rp.max_correspondence_start = rp.max_correspondence_end;  // already on the right member
+      if (params.sparse_final_iterations > 0) rp.max_iterations = params.sparse_final_iterations;
       if (!groundLineStepDirection(estimate, params.ground_z, &rp.frozen_direction)) {
         rp.frozen_direction.setZero();
       }

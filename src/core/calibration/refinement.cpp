@@ -157,6 +157,16 @@ Linearisation linearise(const SurfaceModel& model, const ScanSet& target, const 
                    params.range_noise, params.reference_noise, point_loss);
 }
 
+double robustCostOverAll(const Linearisation& lin, std::size_t target_points,
+                         double max_correspondence, double huber) {
+  if (target_points == 0) return std::numeric_limits<double>::infinity();
+  const double cap = max_correspondence;
+  const double miss = cap <= huber ? 0.5 * cap * cap : huber * (cap - 0.5 * huber);
+  const long n = std::min<long>(lin.correspondences, static_cast<long>(target_points));
+  const double sum = n > 0 ? lin.cost * static_cast<double>(n) : 0.0;
+  return (sum + miss * static_cast<double>(target_points - n)) / static_cast<double>(target_points);
+}
+
 Pose6 applyStep(const Pose6& extrinsic, const Pose6& step) {
   Eigen::Isometry3d t = toIsometry(extrinsic);
   const Eigen::Vector3d w = step.tail<3>();
@@ -177,12 +187,20 @@ RefinementResult refine(const SurfaceModel& model, const ScanSet& target, const 
   RefinementResult res;
   res.extrinsic = initial;
   const int iters = std::max(1, params.max_iterations);
+  Linearisation reuse;  // at res.extrinsic with reuse_corr, from the extrapolation
+  double reuse_corr = 0;
+  bool reuse_valid = false;
+  double accepted_multiple = 1.0;  // of the previous iteration's step (extrapolation_steps)
   for (int it = 0; it < iters; ++it) {
     // Correspondence distance shrinks over the first half, then stays at the end value.
     const double f = std::min(1.0, it / std::max(1.0, 0.5 * iters));
     const double max_corr = params.max_correspondence_start +
                             f * (params.max_correspondence_end - params.max_correspondence_start);
-    const Linearisation lin = linearise(model, target, res.extrinsic, max_corr, params);
+    // The previous iteration's extrapolation already linearised here (same distance): reused.
+    const Linearisation lin = reuse_valid && reuse_corr == max_corr
+                                  ? reuse
+                                  : linearise(model, target, res.extrinsic, max_corr, params);
+    reuse_valid = false;
     if (lin.correspondences < 6) break;
     Matrix6 a = lin.hessian;
     const double floor = 1e-9 * std::max(1e-12, a.diagonal().maxCoeff());
@@ -200,6 +218,34 @@ RefinementResult refine(const SurfaceModel& model, const ScanSet& target, const 
       step = -a.ldlt().solve(lin.gradient);
     }
     if (!step.allFinite()) break;
+    if (params.extrapolation_steps > 0) {
+      // Each trial point is linearised in full: the accepted one serves the next iteration. The
+      // trials start at half the previous iteration's accepted multiple (the pull-back is much
+      // the same from one iteration to the next), or at the plain step if that raised the cost.
+      const double current = robustCostOverAll(lin, target.numPoints(), max_corr, params.huber);
+      const double cap = std::ldexp(1.0, params.extrapolation_steps);
+      double multiple = std::max(1.0, 0.5 * accepted_multiple);
+      reuse = linearise(model, target, applyStep(res.extrinsic, multiple * step), max_corr, params);
+      double best = robustCostOverAll(reuse, target.numPoints(), max_corr, params.huber);
+      if (multiple > 1.0 && !(best < current)) {
+        multiple = 1.0;
+        reuse = linearise(model, target, applyStep(res.extrinsic, step), max_corr, params);
+        best = robustCostOverAll(reuse, target.numPoints(), max_corr, params.huber);
+      }
+      while (2.0 * multiple <= cap) {
+        Linearisation longer = linearise(model, target, applyStep(res.extrinsic, 2.0 * multiple * step),
+                                         max_corr, params);
+        const double c = robustCostOverAll(longer, target.numPoints(), max_corr, params.huber);
+        if (!(c < best)) break;
+        best = c;
+        multiple *= 2.0;
+        reuse = longer;
+      }
+      step *= multiple;
+      accepted_multiple = multiple;
+      reuse_corr = max_corr;
+      reuse_valid = true;
+    }
     res.extrinsic = applyStep(res.extrinsic, step);
     res.iterations = it + 1;
     res.trace.push_back(res.extrinsic);
@@ -221,7 +267,10 @@ RefinementResult refine(const SurfaceModel& model, const ScanSet& target, const 
       break;
     }
   }
-  res.at_solution = linearise(model, target, res.extrinsic, params.max_correspondence_end, params);
+  res.at_solution = reuse_valid && reuse_corr == params.max_correspondence_end
+                        ? reuse
+                        : linearise(model, target, res.extrinsic, params.max_correspondence_end,
+                                    params);
   return res;
 }
 
