@@ -533,7 +533,7 @@ int main(int argc, char** argv) {
                cpu_max = *std::max_element(cpu_seconds.begin(), cpu_seconds.end());
   std::printf("seconds per trial: median %.2f max %.2f (wall clock); cpu median %.2f max %.2f; "
               "successes %d/%d; unobservable:",
-              sec_median, sec_max, cpu_median, cpu_max, successes, trials);
+              sec_median, sec_max, cpu_median, cpu_max, successes, static_cast<int>(seconds.size()));
   for (const std::string& u : unobservable) std::printf(" %s", u.c_str());
   std::printf("%s\n", unobservable.empty() ? " none" : "");
 

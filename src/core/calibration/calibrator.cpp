@@ -190,6 +190,17 @@ CalibrationResult calibrate(const CalibrationInput& input, const CalibrationPara
     r.cpu_time = threadCpuSeconds() - cpu0;
     return r;
   };
+  // The coarse search is stochastic: another draw of its particles (the next seed) may find the
+  // right basin. At most params.coarse_restarts times; the result counts this attempt's work.
+  const auto restartCoarseSearch = [&]() -> CalibrationResult {
+    CalibrationParams again = params;
+    again.coarse_restarts = params.coarse_restarts - 1;
+    again.search.seed = params.search.seed + 1;
+    CalibrationResult retry = calibrate(input, again, progress);
+    retry.evaluations += out.evaluations;
+    retry.restarts += 1;
+    return finish(retry);
+  };
   if (!isMethod(params.method)) {
     out.message = "unknown method '" + params.method + "'";
     return finish(out);
@@ -419,13 +430,7 @@ CalibrationResult calibrate(const CalibrationInput& input, const CalibrationPara
   // restarts now instead. (Its last attempt still goes on, so that the failure is reported.)
   if (!cancelled && params.method == "coarse_to_fine" && sparse && params.plane_sweep_steps > 0 &&
       out.plane_sweep.empty() && params.coarse_restarts > 0) {
-    CalibrationParams again = params;
-    again.coarse_restarts = params.coarse_restarts - 1;
-    again.search.seed = params.search.seed + 1;
-    CalibrationResult retry = calibrate(input, again, progress);
-    retry.evaluations += out.evaluations;
-    retry.restarts += 1;
-    return finish(retry);
+    return restartCoarseSearch();
   }
   if (!cancelled && (refine_only || params.method == "coarse_to_fine")) {
     RefinementParams rp = params.refinement;
@@ -503,14 +508,7 @@ CalibrationResult calibrate(const CalibrationInput& input, const CalibrationPara
   }
   out.message = msg.str();
   if (outside && !cancelled && params.method == "coarse_to_fine" && params.coarse_restarts > 0) {
-    // The coarse search is stochastic: another draw of its particles may find the right basin.
-    CalibrationParams again = params;
-    again.coarse_restarts = params.coarse_restarts - 1;
-    again.search.seed = params.search.seed + 1;
-    CalibrationResult retry = calibrate(input, again, progress);
-    retry.evaluations += out.evaluations;
-    retry.restarts += 1;
-    return finish(retry);
+    return restartCoarseSearch();
   }
   finish(out);
   if (!out.message.empty() && out.success) {
