@@ -240,20 +240,18 @@ void printDiagnosis(const cal::ExperimentTrial& trial, const cal::CalibrationPar
     costs(r.extrinsic, &fs, &ss);
     std::printf("          calibrator's costs (final refinement's weighting / sweep's): at the truth "
                 "%.6f / %.6f, at the solution %.6f / %.6f\n", ft, st, fs, ss);
-    // The truth refined with the final refinement's settings: where that cost's minimum lies.
+    // The truth refined with given settings: where that cost's minimum lies.
+    const auto from_truth = [&](const char* label, const cal::RefinementParams& with) {
+      const cal::Pose6 e = cal::poseDifference(
+          cal::refine(sparse_model, target, trial.truth, with).extrinsic, trial.truth);
+      std::printf("          %s: x %+.3f y %+.3f z %+.3f m, roll %+.4f pitch %+.4f yaw %+.4f rad\n",
+                  label, e[0], e[1], e[2], e[3], e[4], e[5]);
+    };
     cal::RefinementParams rp = final_rp;
     rp.max_correspondence_start = rp.max_correspondence_end;
-    const cal::Pose6 m = cal::poseDifference(
-        cal::refine(sparse_model, target, trial.truth, rp).extrinsic, trial.truth);
-    std::printf("          final refinement started at the truth ends at error: x %+.3f y %+.3f "
-                "z %+.3f m, roll %+.4f pitch %+.4f yaw %+.4f rad\n",
-                m[0], m[1], m[2], m[3], m[4], m[5]);
+    from_truth("final refinement started at the truth ends at error", rp);
     if (cal::groundLineStepDirection(trial.truth, params.ground_z, &rp.frozen_direction)) {
-      const cal::Pose6 mf = cal::poseDifference(
-          cal::refine(sparse_model, target, trial.truth, rp).extrinsic, trial.truth);
-      std::printf("          same with the ground-line rotation held (as after the sweep): x %+.3f "
-                  "y %+.3f z %+.3f m, roll %+.4f pitch %+.4f yaw %+.4f rad\n",
-                  mf[0], mf[1], mf[2], mf[3], mf[4], mf[5]);
+      from_truth("same with the ground-line rotation held (as after the sweep)", rp);
     }
     {
       // The sweep's score along the family through the truth, each member fully refined
@@ -285,11 +283,7 @@ void printDiagnosis(const cal::ExperimentTrial& trial, const cal::CalibrationPar
     }
     rp = scored;
     rp.max_correspondence_start = rp.max_correspondence_end;
-    const cal::Pose6 ms = cal::poseDifference(
-        cal::refine(sparse_model, target, trial.truth, rp).extrinsic, trial.truth);
-    std::printf("          same with the sweep's weighting ends at error: x %+.3f y %+.3f "
-                "z %+.3f m, roll %+.4f pitch %+.4f yaw %+.4f rad\n",
-                ms[0], ms[1], ms[2], ms[3], ms[4], ms[5]);
+    from_truth("same with the sweep's weighting ends at error", rp);
   }
   std::printf("          observability at the solution: scaled eigenvalues");
   for (int i = 0; i < 6; ++i) std::printf(" %.3g", r.observability.eigenvalues[i]);

@@ -78,15 +78,15 @@ struct CalibrationParams {
   double plane_sweep_range = 0.3;    // [rad]
   int plane_sweep_iterations = 10;
   // Passes of that sweep: the first over the whole range, each further one halves the spacing
-  // around the best member (2 new members each); a parabola through the last pass's best member
-  // and its neighbours places the minimum. (4 passes: 0.00625 rad, ~6 cm in z for a SICK meeting
-  // the ground 10 m away; the previous 2 passes of 5 ended at 0.025 rad, 0.25 m.)
+  // around the best member (2 new members each); a least-squares parabola through all the later
+  // passes' members places the minimum.
   int plane_sweep_passes = 3;
-  // The first pass refines its members on the target evenly thinned to this many points (0 = the
-  // refinement's target), plain Gauss-Newton; the later passes' members are refined on the
-  // target thinned to plane_sweep_fine_points for plane_sweep_fine_iterations, their steps extrapolated (sparse_extrapolation_steps)
-  // so that x and y converge: unconverged members scored up to 0.005 rad off the profile's
-  // minimum, and x 4-8 cm off with it.
+  // The first pass refines its members on the target evenly thinned to
+  // plane_sweep_coarse_points (0 = the refinement's target), plain Gauss-Newton; the later
+  // passes' members on the target thinned to plane_sweep_fine_points for
+  // plane_sweep_fine_iterations, their steps extrapolated (sparse_extrapolation_steps) so that
+  // x and y converge: unconverged members scored up to 0.005 rad off the profile's minimum, and
+  // x 4-8 cm off with it.
   int plane_sweep_walks = 3;  // extra passes at the same spacing while the best is at an edge
   int plane_sweep_coarse_points = 12000;
   int plane_sweep_fine_points = 0;

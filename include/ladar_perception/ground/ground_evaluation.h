@@ -82,8 +82,9 @@ inline Eigen::Isometry3d evaluationSensorMount() {
 
 constexpr double kAtGroundRadius = 0.3;  // [m]
 
-// Marks the obstacle returns of `scan` (taken at `sensor` in the world) that lie within `band`
-// in height of a ground-class cell of the world less than kAtGroundRadius away horizontally.
+// Marks the obstacle returns of `view` (truth: their classes; taken at `sensor` in the world)
+// that lie within `band` in height of a ground-class cell less than kAtGroundRadius away
+// horizontally.
 inline void markObstacleReturnsAtTheGround(const sim::World& world, const Eigen::Isometry3d& sensor,
                                            const PointCloudView& view, const std::vector<uint8_t>& truth,
                                            double band, std::vector<uint8_t>* at_ground) {

@@ -264,7 +264,7 @@ class VerticalScanGround : public GroundModel {
   static constexpr std::size_t kKnotPad = 4;
   int knot_stride_ = 0;
   std::vector<float> knot_height_;
-  std::vector<float> knot_support_;            // columns_ x knots_
+  std::vector<float> knot_support_;            // columns_ x knot_stride_ (no leading pad)
   std::vector<float> coupled_;                 // like knot_height_
   std::vector<float> slope_coupled_;           // columns_
   std::vector<float> rep_;  // bin representatives' (r, height) pairs, r < 0: empty bin

@@ -282,15 +282,17 @@ CalibrationResult calibrate(const CalibrationInput& input, const CalibrationPara
     RefinementParams fine = params.refinement;
     fine.max_iterations = std::max(1, params.plane_sweep_fine_iterations);
     fine.max_correspondence_start = fine.max_correspondence_end;
-    RefinementParams coarse_rp = params.refinement;
-    coarse_rp.max_target_points = params.plane_sweep_coarse_points > 0
-                                      ? params.plane_sweep_coarse_points
-                                      : coarse_rp.max_target_points;
-    const ScanSet coarse_target = refinementTarget(input.target, coarse_rp);
-    RefinementParams fine_rp = params.refinement;
-    fine_rp.max_target_points = params.plane_sweep_fine_points > 0 ? params.plane_sweep_fine_points
-                                                                   : fine_rp.max_target_points;
-    const ScanSet fine_target = refinementTarget(input.target, fine_rp);
+    // The passes' targets: the input thinned to that many points, or the refinement's (0).
+    const auto thinned = [&](int points, ScanSet* own) -> const ScanSet& {
+      if (points <= 0) return target;
+      RefinementParams rp = params.refinement;
+      rp.max_target_points = points;
+      *own = refinementTarget(input.target, rp);
+      return *own;
+    };
+    ScanSet coarse_own, fine_own;
+    const ScanSet& coarse_target = thinned(params.plane_sweep_coarse_points, &coarse_own);
+    const ScanSet& fine_target = thinned(params.plane_sweep_fine_points, &fine_own);
     const auto possible = [&](const Pose6& p) {
       return insideRegion(p, params) &&
              !grazesGround(p, params.ground_z, params.min_ground_incidence,

@@ -1239,9 +1239,8 @@ void VerticalScanGround::labelPoints(GroundClassification* out) {
             const __m128 v = _mm_min_ps(_mm_mul_ps(local, v_inv_v_slope), v_one);
             best = _mm_max_ps(_mm_mul_ps(g, v), best);
           }
-          const __m128 with_pv = best;
           const __m128 take = _mm_and_ps(need, _mm_castsi128_ps(_mm_andnot_si128(invalid, v_invalid_all)));
-          p4v = _mm_or_ps(_mm_and_ps(take, with_pv), _mm_andnot_ps(take, p4v));
+          p4v = _mm_or_ps(_mm_and_ps(take, best), _mm_andnot_ps(take, p4v));
         }
       }
       p4v = _mm_andnot_ps(_mm_castsi128_ps(invalid), p4v);  // unknown: 0 as binPoints wrote
