@@ -194,6 +194,24 @@ TEST(VerticalScanEquations, TrackedLineBridgesAPothole) {
   EXPECT_LT(line.heightAt(6.03f), -0.03f);
 }
 
+TEST(VerticalScanEquations, TrackedLineRecoversOnGroundFallingAwayBelowIt) {
+  // Ground falling at 30 % (down an embankment), then 40 cm lower on the same slope (behind
+  // an edge the line passed over): the lower returns, 0.4 m apart, fall 12 cm from one to the
+  // next. They continue each other at the line's slope, so after track_recover_distance they
+  // restart the line there instead of being labelled negative obstacles all the way down.
+  VerticalScanParams p = verticalScanDefaultParams();
+  std::vector<float> r, h;
+  for (float x = 4.f; x < 8.05f; x += 0.4f) { r.push_back(x); h.push_back(-0.3f * x); }
+  for (float x = 8.4f; x < 14.f; x += 0.4f) { r.push_back(x); h.push_back(-0.3f * x - 0.4f); }
+  const int knots = 24;
+  std::vector<float> kh(knots), ks(knots), scratch(2 * (r.size() + 1));
+  vertical_scan::trackGroundLine(r.data(), h.data(), static_cast<int>(r.size()), p, -0.3f, knots,
+                                 kh.data(), ks.data(), scratch.data());
+  vertical_scan::GroundLine line{kh.data(), knots, 1.f / p.segment_length};
+  EXPECT_NEAR(line.heightAt(6.f), -1.8f, 0.02f);
+  for (float x : {10.f, 12.f, 13.5f}) EXPECT_NEAR(line.heightAt(x), -0.3f * x - 0.4f, 0.03f) << "r " << x;
+}
+
 // ---------------------------------------------------------------- row assignment
 
 TEST(ElevationRowTable, EveryHdl64eLaserMapsToItsRing) {

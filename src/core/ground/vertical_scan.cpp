@@ -336,10 +336,15 @@ int trackGroundLine(const float* r, const float* height, int n, const VerticalSc
     // grow; otherwise the line follows the pothole's far wall down and its floor becomes ground.
     if (res < -(drop + (hole ? 0.f : grow))) {
       if (res < -(drop + grow + hole_depth)) hole = true;
-      // Below the line: remember a run of mutually consistent returns.
-      if (below_last >= 0 &&
-          std::fabs(height[i] - height[below_last]) <
-              p.track_max_drop + p.track_tolerance_per_m * (r[i] - r[below_last]) + 0.05f) {
+      // Below the line: remember a run of mutually consistent returns, each continuing the
+      // previous level or at the line's slope (ground that falls away behind an obstacle,
+      // e.g. an embankment into a ditch), or anything in between.
+      const float run_dr = below_last >= 0 ? r[i] - r[below_last] : 0.f;
+      const float run_dh = below_last >= 0 ? height[i] - height[below_last] : 0.f;
+      const float run_tol = p.track_max_drop + p.track_tolerance_per_m * run_dr + 0.05f;
+      const float along = slope * run_dr;
+      if (below_last >= 0 && run_dh < std::max(along, 0.f) + run_tol &&
+          run_dh > std::min(along, 0.f) - run_tol) {
         below_last = i;
       } else {
         below_first = below_last = i;
