@@ -32,6 +32,7 @@ VerticalScanParams toVerticalScanParams(const VerticalScanGroundConfig& c) {
   p.track_max_bend = static_cast<float>(c.track_max_bend);
   p.track_recover_distance = static_cast<float>(c.track_recover_distance);
   p.negative_gnd_error_max = static_cast<float>(c.negative_gnd_error_max);
+  p.negative_support_distance = static_cast<float>(c.negative_support_distance);
   p.vertical_gnd_error_max = static_cast<float>(c.vertical_gnd_error_max);
   p.vertical_slope_max = static_cast<float>(c.vertical_slope_max);
   p.vertical_foot_slope = static_cast<float>(c.vertical_foot_slope);
@@ -69,6 +70,7 @@ void loadMethodSettings(const std::string& method, VerticalScanGroundConfig* c) 
   c->track_max_bend = p.track_max_bend;
   c->track_recover_distance = p.track_recover_distance;
   c->negative_gnd_error_max = p.negative_gnd_error_max;
+  c->negative_support_distance = p.negative_support_distance;
   c->vertical_gnd_error_max = p.vertical_gnd_error_max;
   c->vertical_slope_max = p.vertical_slope_max;
   c->vertical_foot_slope = p.vertical_foot_slope;

@@ -6,6 +6,7 @@
 // incidence; potholes: shallow bowl edges; obstacle recall on the hillside's poles and car),
 // it asserts the level measured when the test was written, so a regression fails, and the gap
 // is reported in the ground_eval table rather than hidden.
+#include <cstdio>
 #include <cstring>
 #include <string>
 #include <vector>
@@ -75,6 +76,27 @@ TEST(GroundAccuracy, DefaultBeatsThesisOnObstaclesAndKeepsTheGround) {
   const GroundAccuracy thesis_holes = evaluate("potholes", verticalScanThesisParams());
   const GroundAccuracy fresh_holes = evaluate("potholes", verticalScanDefaultParams());
   EXPECT_GT(fresh_holes.obstacleRecall(), thesis_holes.obstacleRecall() + 0.3);
+}
+
+TEST(GroundAccuracy, NegativeObstaclesOnlyBelowASupportedLine) {
+  // Rural: behind a car or a person at the top of an embankment, the ground falling into the
+  // ditch is seen only in bins the obstacle fills, below a line extrapolated over it. Calling
+  // returns below the line obstacles only within negative_support_distance of the column's own
+  // ground returns keeps that ground; the potholes, all near returns of the road, are found as
+  // before.
+  VerticalScanParams ungated = verticalScanDefaultParams();
+  ungated.negative_support_distance = 0.f;
+  const GroundAccuracy on = evaluate("rural", verticalScanDefaultParams());
+  const GroundAccuracy off = evaluate("rural", ungated);
+  EXPECT_GE(on.groundRecall(), 0.99);
+  EXPECT_GT(on.groundRecall(), off.groundRecall() + 0.004);
+  EXPECT_GT(on.obstacleRecall(), off.obstacleRecall() - 0.003);
+  const GroundAccuracy holes_on = evaluate("potholes", verticalScanDefaultParams());
+  const GroundAccuracy holes_off = evaluate("potholes", ungated);
+  EXPECT_NEAR(holes_on.obstacleRecall(), holes_off.obstacleRecall(), 0.002);
+  std::printf("rural ground recall %.4f (ungated %.4f), obstacle recall %.4f (%.4f); potholes %.4f (%.4f)\n",
+              on.groundRecall(), off.groundRecall(), on.obstacleRecall(), off.obstacleRecall(),
+              holes_on.obstacleRecall(), holes_off.obstacleRecall());
 }
 
 TEST(GroundAccuracy, ObstacleReturnsAtTheGroundAreMarked) {

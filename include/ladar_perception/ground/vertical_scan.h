@@ -60,6 +60,13 @@ struct VerticalScanParams {
   // GndErrorMax for returns BELOW the ground line (potholes, ditches) at r = 0 [m]; grows with
   // r like tolerances.gnd_error_max_per_m. 0 = the same tolerance as above the line (thesis).
   float negative_gnd_error_max = 0.05f;
+  // ... but only where the line is the column's own: within this distance of one of its ground
+  // returns (knot k or k + 1 of the line at r; knot support 1 / (1 + distance)). Elsewhere the
+  // line is interpolated or extrapolated through terrain the column did not track (ground seen
+  // beside an obstacle in bins the obstacle fills, a slope falling away behind it), and a return
+  // below it is an obstacle only on a vertical surface: P_vertical with its depth below the
+  // line as the GndError factor. <= 0: no such gate [m].
+  float negative_support_distance = 1.0f;
   // Vertical surfaces (curb faces, the lower parts of cars and walls): a second obstacle
   // probability from the local terrain slope |dHeight/dr| between a return and the
   // representatives of the laser rows just below and above it in its column (the smaller of
@@ -266,6 +273,8 @@ class VerticalScanGround : public GroundModel {
   std::vector<float> knot_height_;
   std::vector<float> knot_support_;            // columns_ x knot_stride_ (no leading pad)
   std::vector<float> coupled_;                 // like knot_height_
+  // labelPoints: groups of four returns with a negative obstacle, (group << 4) | lane bits.
+  std::vector<uint32_t, DefaultInitAllocator<uint32_t>> below_line_groups_;
   std::vector<float> slope_coupled_;           // columns_
   std::vector<float> rep_;  // bin representatives' (r, height) pairs, r < 0: empty bin
   std::vector<float> column_slope_;            // straight estimate per column
