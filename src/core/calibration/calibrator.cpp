@@ -174,10 +174,31 @@ std::string joinNames(const std::vector<std::string>& names) {
   return s;
 }
 
+// The reference's dense surface model and the refinement's target: built once per calibrate()
+// and shared by its coarse-search restarts, which differ from the first attempt in the seed only.
+struct DenseProblem {
+  bool built = false;
+  SurfaceModel model;
+  ScanSet target;
+};
+
+CalibrationResult calibrateAttempt(const CalibrationInput& input,
+                                   const CalibrationParams& params_in, const ProgressFn& progress,
+                                   DenseProblem* dense);
+
 }  // namespace
 
-CalibrationResult calibrate(const CalibrationInput& input, const CalibrationParams& params_in,
+CalibrationResult calibrate(const CalibrationInput& input, const CalibrationParams& params,
                             const ProgressFn& progress) {
+  DenseProblem dense;
+  return calibrateAttempt(input, params, progress, &dense);
+}
+
+namespace {
+
+CalibrationResult calibrateAttempt(const CalibrationInput& input,
+                                   const CalibrationParams& params_in, const ProgressFn& progress,
+                                   DenseProblem* dense) {
   const auto t0 = Clock::now();
   const double cpu0 = threadCpuSeconds();
   CalibrationResult out;
@@ -196,7 +217,7 @@ CalibrationResult calibrate(const CalibrationInput& input, const CalibrationPara
     CalibrationParams again = params;
     again.coarse_restarts = params.coarse_restarts - 1;
     again.search.seed = params.search.seed + 1;
-    CalibrationResult retry = calibrate(input, again, progress);
+    CalibrationResult retry = calibrateAttempt(input, again, progress, dense);
     retry.evaluations += out.evaluations;
     retry.restarts += 1;
     return finish(retry);
@@ -258,12 +279,16 @@ CalibrationResult calibrate(const CalibrationInput& input, const CalibrationPara
   if (sparse && params.sparse_keep_edges) params.refinement.keep_edges = true;
   if (sparse && params.sparse_noise_floor > 0) params.refinement.noise_floor = params.sparse_noise_floor;
   if (sparse) params.refinement.extrapolation_steps = params.sparse_extrapolation_steps;
-  PointVector reference;
-  accumulate(input.reference, input.reference_extrinsic, &reference);
-  reference = voxelDownsample(reference, params.refinement.reference_voxel);
-  SurfaceModel model;
-  model.build(reference, params.refinement);
-  const ScanSet target = refinementTarget(input.target, params.refinement);
+  if (!dense->built) {
+    PointVector reference;
+    accumulate(input.reference, input.reference_extrinsic, &reference);
+    reference = voxelDownsample(reference, params.refinement.reference_voxel);
+    dense->model.build(reference, params.refinement);
+    dense->target = refinementTarget(input.target, params.refinement);
+    dense->built = true;
+  }
+  const SurfaceModel& model = dense->model;
+  const ScanSet& target = dense->target;
   Linearisation lin;
   if (!cancelled && params.method == "coarse_to_fine" && sparse && params.plane_sweep_steps > 0) {
     // The ground-line ambiguity of a 2D ladar (scan_plane.h): a local refinement slides along
@@ -520,6 +545,8 @@ CalibrationResult calibrate(const CalibrationInput& input, const CalibrationPara
   }
   return out;
 }
+
+}  // namespace
 
 Pose6 repeatability(const CalibrationInput& input, const CalibrationParams& params,
                     const Pose6& solution, int windows, std::vector<Pose6>* window_solutions) {
