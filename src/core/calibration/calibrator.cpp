@@ -476,6 +476,12 @@ CalibrationResult calibrateAttempt(const CalibrationInput& input,
     lin = out.refinement.at_solution;
     out.final_cost = lin.cost;
   }
+  // A solution outside the search region: the coarse search settled in a wrong basin, and it
+  // restarts with its next seed before the observability check is spent on it.
+  if (!cancelled && params.method == "coarse_to_fine" && params.coarse_restarts > 0 &&
+      !insideRegion(estimate, params)) {
+    return restartCoarseSearch();
+  }
   // The curvature means something only at a minimum of the dense cost. A search method that is
   // not refined (the thesis's particle filter, ...) may stop on a slope of it; the observability
   // is then read at the nearest minimum (a copy refined from the solution, the reported extrinsic
@@ -534,9 +540,6 @@ CalibrationResult calibrateAttempt(const CalibrationInput& input,
         << out.final_cost;
   }
   out.message = msg.str();
-  if (outside && !cancelled && params.method == "coarse_to_fine" && params.coarse_restarts > 0) {
-    return restartCoarseSearch();
-  }
   finish(out);
   if (!out.message.empty() && out.success) {
     std::ostringstream t;
