@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <limits>
+#include <memory>
 #include <cmath>
 #include <sstream>
 
@@ -174,31 +175,33 @@ std::string joinNames(const std::vector<std::string>& names) {
   return s;
 }
 
-// The reference's dense surface model and the refinement's target: built once per calibrate()
-// and shared by its coarse-search restarts, which differ from the first attempt in the seed only.
-struct DenseProblem {
-  bool built = false;
+// The search's hypothesis score, the reference's dense surface model and the refinement's
+// target: built once per calibrate() and shared by its coarse-search restarts, which differ from
+// the first attempt in the seed only.
+struct SharedModels {
+  std::unique_ptr<HypothesisCost> cost;
+  bool built = false;  // model and target
   SurfaceModel model;
   ScanSet target;
 };
 
 CalibrationResult calibrateAttempt(const CalibrationInput& input,
                                    const CalibrationParams& params_in, const ProgressFn& progress,
-                                   DenseProblem* dense);
+                                   SharedModels* shared);
 
 }  // namespace
 
 CalibrationResult calibrate(const CalibrationInput& input, const CalibrationParams& params,
                             const ProgressFn& progress) {
-  DenseProblem dense;
-  return calibrateAttempt(input, params, progress, &dense);
+  SharedModels shared;
+  return calibrateAttempt(input, params, progress, &shared);
 }
 
 namespace {
 
 CalibrationResult calibrateAttempt(const CalibrationInput& input,
                                    const CalibrationParams& params_in, const ProgressFn& progress,
-                                   DenseProblem* dense) {
+                                   SharedModels* shared) {
   const auto t0 = Clock::now();
   const double cpu0 = threadCpuSeconds();
   CalibrationResult out;
@@ -217,7 +220,7 @@ CalibrationResult calibrateAttempt(const CalibrationInput& input,
     CalibrationParams again = params;
     again.coarse_restarts = params.coarse_restarts - 1;
     again.search.seed = params.search.seed + 1;
-    CalibrationResult retry = calibrateAttempt(input, again, progress, dense);
+    CalibrationResult retry = calibrateAttempt(input, again, progress, shared);
     retry.evaluations += out.evaluations;
     retry.restarts += 1;
     return finish(retry);
@@ -245,7 +248,8 @@ CalibrationResult calibrateAttempt(const CalibrationInput& input,
   bool cancelled = false;
   const bool refine_only = params.method == "refine";
   if (!refine_only) {
-    HypothesisCost cost_fn(input, params);
+    if (!shared->cost) shared->cost.reset(new HypothesisCost(input, params));
+    HypothesisCost& cost_fn = *shared->cost;
     if (!cost_fn.valid()) {
       out.message = "the reference gives no features (empty after thinning?)";
       return finish(out);
@@ -279,16 +283,16 @@ CalibrationResult calibrateAttempt(const CalibrationInput& input,
   if (sparse && params.sparse_keep_edges) params.refinement.keep_edges = true;
   if (sparse && params.sparse_noise_floor > 0) params.refinement.noise_floor = params.sparse_noise_floor;
   if (sparse) params.refinement.extrapolation_steps = params.sparse_extrapolation_steps;
-  if (!dense->built) {
+  if (!shared->built) {
     PointVector reference;
     accumulate(input.reference, input.reference_extrinsic, &reference);
     reference = voxelDownsample(reference, params.refinement.reference_voxel);
-    dense->model.build(reference, params.refinement);
-    dense->target = refinementTarget(input.target, params.refinement);
-    dense->built = true;
+    shared->model.build(reference, params.refinement);
+    shared->target = refinementTarget(input.target, params.refinement);
+    shared->built = true;
   }
-  const SurfaceModel& model = dense->model;
-  const ScanSet& target = dense->target;
+  const SurfaceModel& model = shared->model;
+  const ScanSet& target = shared->target;
   Linearisation lin;
   if (!cancelled && params.method == "coarse_to_fine" && sparse && params.plane_sweep_steps > 0) {
     // The ground-line ambiguity of a 2D ladar (scan_plane.h): a local refinement slides along
