@@ -87,8 +87,8 @@ struct CalibrationParams {
   // plane_sweep_fine_iterations, their steps extrapolated (sparse_extrapolation_steps) so that
   // x and y converge: unconverged members scored up to 0.005 rad off the profile's minimum, and
   // x 4-8 cm off with it. Half the refinement's 60000 points for the later passes kept the
-  // benchmark's accuracy (seeds 1-3) at ~25% less CPU per trial; 20000 put a trial of seed 1 and
-  // one of seed 2 on a wrong member (z 0.30 m, x 1.75 m off).
+  // benchmark's accuracy (seeds 1-3) at ~25% less CPU per trial; 20000 put a trial of seed 1 on
+  // a wrong member (z 0.30 m off) and one of seed 2 1.75 m off in x.
   int plane_sweep_walks = 3;  // extra passes at the same spacing while the best is at an edge
   int plane_sweep_coarse_points = 12000;
   int plane_sweep_fine_points = 30000;
