@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <limits>
+#include <memory>
 #include <cmath>
 #include <sstream>
 
@@ -174,10 +175,33 @@ std::string joinNames(const std::vector<std::string>& names) {
   return s;
 }
 
+// The search's hypothesis score, the reference's dense surface model and the refinement's
+// target: built once per calibrate() and shared by its coarse-search restarts, which differ from
+// the first attempt in the seed only.
+struct SharedModels {
+  std::unique_ptr<HypothesisCost> cost;
+  bool built = false;  // model and target
+  SurfaceModel model;
+  ScanSet target;
+};
+
+CalibrationResult calibrateAttempt(const CalibrationInput& input,
+                                   const CalibrationParams& params_in, const ProgressFn& progress,
+                                   SharedModels* shared);
+
 }  // namespace
 
-CalibrationResult calibrate(const CalibrationInput& input, const CalibrationParams& params_in,
+CalibrationResult calibrate(const CalibrationInput& input, const CalibrationParams& params,
                             const ProgressFn& progress) {
+  SharedModels shared;
+  return calibrateAttempt(input, params, progress, &shared);
+}
+
+namespace {
+
+CalibrationResult calibrateAttempt(const CalibrationInput& input,
+                                   const CalibrationParams& params_in, const ProgressFn& progress,
+                                   SharedModels* shared) {
   const auto t0 = Clock::now();
   const double cpu0 = threadCpuSeconds();
   CalibrationResult out;
@@ -196,7 +220,7 @@ CalibrationResult calibrate(const CalibrationInput& input, const CalibrationPara
     CalibrationParams again = params;
     again.coarse_restarts = params.coarse_restarts - 1;
     again.search.seed = params.search.seed + 1;
-    CalibrationResult retry = calibrate(input, again, progress);
+    CalibrationResult retry = calibrateAttempt(input, again, progress, shared);
     retry.evaluations += out.evaluations;
     retry.restarts += 1;
     return finish(retry);
@@ -224,7 +248,8 @@ CalibrationResult calibrate(const CalibrationInput& input, const CalibrationPara
   bool cancelled = false;
   const bool refine_only = params.method == "refine";
   if (!refine_only) {
-    HypothesisCost cost_fn(input, params);
+    if (!shared->cost) shared->cost.reset(new HypothesisCost(input, params));
+    HypothesisCost& cost_fn = *shared->cost;
     if (!cost_fn.valid()) {
       out.message = "the reference gives no features (empty after thinning?)";
       return finish(out);
@@ -258,12 +283,16 @@ CalibrationResult calibrate(const CalibrationInput& input, const CalibrationPara
   if (sparse && params.sparse_keep_edges) params.refinement.keep_edges = true;
   if (sparse && params.sparse_noise_floor > 0) params.refinement.noise_floor = params.sparse_noise_floor;
   if (sparse) params.refinement.extrapolation_steps = params.sparse_extrapolation_steps;
-  PointVector reference;
-  accumulate(input.reference, input.reference_extrinsic, &reference);
-  reference = voxelDownsample(reference, params.refinement.reference_voxel);
-  SurfaceModel model;
-  model.build(reference, params.refinement);
-  const ScanSet target = refinementTarget(input.target, params.refinement);
+  if (!shared->built) {
+    PointVector reference;
+    accumulate(input.reference, input.reference_extrinsic, &reference);
+    reference = voxelDownsample(reference, params.refinement.reference_voxel);
+    shared->model.build(reference, params.refinement);
+    shared->target = refinementTarget(input.target, params.refinement);
+    shared->built = true;
+  }
+  const SurfaceModel& model = shared->model;
+  const ScanSet& target = shared->target;
   Linearisation lin;
   if (!cancelled && params.method == "coarse_to_fine" && sparse && params.plane_sweep_steps > 0) {
     // The ground-line ambiguity of a 2D ladar (scan_plane.h): a local refinement slides along
@@ -451,6 +480,12 @@ CalibrationResult calibrate(const CalibrationInput& input, const CalibrationPara
     lin = out.refinement.at_solution;
     out.final_cost = lin.cost;
   }
+  // A solution outside the search region: the coarse search settled in a wrong basin, and it
+  // restarts with its next seed before the observability check is spent on it.
+  if (!cancelled && params.method == "coarse_to_fine" && params.coarse_restarts > 0 &&
+      !insideRegion(estimate, params)) {
+    return restartCoarseSearch();
+  }
   // The curvature means something only at a minimum of the dense cost. A search method that is
   // not refined (the thesis's particle filter, ...) may stop on a slope of it; the observability
   // is then read at the nearest minimum (a copy refined from the solution, the reported extrinsic
@@ -509,9 +544,6 @@ CalibrationResult calibrate(const CalibrationInput& input, const CalibrationPara
         << out.final_cost;
   }
   out.message = msg.str();
-  if (outside && !cancelled && params.method == "coarse_to_fine" && params.coarse_restarts > 0) {
-    return restartCoarseSearch();
-  }
   finish(out);
   if (!out.message.empty() && out.success) {
     std::ostringstream t;
@@ -520,6 +552,8 @@ CalibrationResult calibrate(const CalibrationInput& input, const CalibrationPara
   }
   return out;
 }
+
+}  // namespace
 
 Pose6 repeatability(const CalibrationInput& input, const CalibrationParams& params,
                     const Pose6& solution, int windows, std::vector<Pose6>* window_solutions) {
