@@ -1127,14 +1127,12 @@ void VerticalScanGround::labelPoints(GroundClassification* out) {
   // GndError factor (no foot term).
   auto below_line_probability = [=](uint32_t b, float r, float h, float prob_i) {
     const std::size_t col = b >> shift;
-    const float f = r * inv_seg;
-    int k = static_cast<int>(f);
+    int k = static_cast<int>(r * inv_seg);  // the line's segment at r, as in GroundLine::heightAt
     k = k < last_k ? k : last_k;
     const float* ks = support + col * K + k;
     if (ks[0] >= min_support || ks[1] >= min_support) return prob_i;
     if (!vertical) return 0.f;
-    const float* kh = knots + col * K;
-    const float ground = kh[k] + (kh[k + 1] - kh[k]) * (f - static_cast<float>(k));
+    const float ground = vertical_scan::GroundLine{knots + col * K, last_k + 2, inv_seg}.heightAt(r);
     float g = (ground - h) * inv_v_gnd;
     g = g < 1.f ? g : 1.f;
     return vertical_probability(b, r, h, g, 0.f, 0.f);
