@@ -63,9 +63,8 @@ struct DofStats {
   double mean = 0, std = 0, mean_abs = 0, worst = 0;
 };
 
-DofStats stats(const std::vector<double>& signed_errors) {
+DofStats stats(const std::vector<double>& v) {  // v: the signed errors
   DofStats s;
-  const std::vector<double>& v = signed_errors;
   if (v.empty()) return s;
   for (double x : v) {
     s.mean += x;

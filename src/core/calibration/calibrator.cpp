@@ -175,14 +175,15 @@ std::string joinNames(const std::vector<std::string>& names) {
   return s;
 }
 
-// The search's hypothesis score, the reference's dense surface model and the refinement's
-// target: built once per calibrate() and shared by its coarse-search restarts, which differ from
-// the first attempt in the seed only.
+// The search's hypothesis score, the reference's dense surface model, the refinement's target
+// and the 2D sweep's thinned targets: built once per calibrate() and shared by its coarse-search
+// restarts, which differ from the first attempt in the seed only.
 struct SharedModels {
   std::unique_ptr<HypothesisCost> cost;
   bool built = false;  // model and target
   SurfaceModel model;
   ScanSet target;
+  ScanSet sweep_coarse_target, sweep_fine_target;  // empty until the sweep first needs them
 };
 
 CalibrationResult calibrateAttempt(const CalibrationInput& input,
@@ -311,17 +312,19 @@ CalibrationResult calibrateAttempt(const CalibrationInput& input,
     RefinementParams fine = params.refinement;
     fine.max_iterations = std::max(1, params.plane_sweep_fine_iterations);
     fine.max_correspondence_start = fine.max_correspondence_end;
-    // The passes' targets: the input thinned to that many points, or the refinement's (0).
+    // The passes' targets: the input thinned to that many points (once per calibrate()), or the
+    // refinement's (0).
     const auto thinned = [&](int points, ScanSet* own) -> const ScanSet& {
       if (points <= 0) return target;
-      RefinementParams rp = params.refinement;
-      rp.max_target_points = points;
-      *own = refinementTarget(input.target, rp);
+      if (own->numScans() == 0) {
+        RefinementParams rp = params.refinement;
+        rp.max_target_points = points;
+        *own = refinementTarget(input.target, rp);
+      }
       return *own;
     };
-    ScanSet coarse_own, fine_own;
-    const ScanSet& coarse_target = thinned(params.plane_sweep_coarse_points, &coarse_own);
-    const ScanSet& fine_target = thinned(params.plane_sweep_fine_points, &fine_own);
+    const ScanSet& coarse_target = thinned(params.plane_sweep_coarse_points, &shared->sweep_coarse_target);
+    const ScanSet& fine_target = thinned(params.plane_sweep_fine_points, &shared->sweep_fine_target);
     const auto possible = [&](const Pose6& p) {
       return insideRegion(p, params) &&
              !grazesGround(p, params.ground_z, params.min_ground_incidence,
@@ -482,8 +485,8 @@ CalibrationResult calibrateAttempt(const CalibrationInput& input,
   }
   // A solution outside the search region: the coarse search settled in a wrong basin, and it
   // restarts with its next seed before the observability check is spent on it.
-  if (!cancelled && params.method == "coarse_to_fine" && params.coarse_restarts > 0 &&
-      !insideRegion(estimate, params)) {
+  const bool outside = !insideRegion(estimate, params);
+  if (outside && !cancelled && params.method == "coarse_to_fine" && params.coarse_restarts > 0) {
     return restartCoarseSearch();
   }
   // The curvature means something only at a minimum of the dense cost. A search method that is
@@ -519,7 +522,6 @@ CalibrationResult calibrateAttempt(const CalibrationInput& input,
   out.unobservable = out.observability.unobservable_names;
   out.extrinsic = estimate;
 
-  const bool outside = !insideRegion(estimate, params);
   std::ostringstream msg;
   if (cancelled) {
     msg << "cancelled";
