@@ -32,7 +32,8 @@ void usage() {
       << "usage: calibration_benchmark [--pair velodyne-velodyne|sick-velodyne|sick-sick|"
          "stereo-velodyne|velodyne-stereo]\n"
          "         [--method NAME] [--trials N] [--seed S] [--world NAME] [--json OUT]\n"
-         "         [--plot OUT.png] [--noise table4.1|datasheet|none] [--poses N]\n"
+         "         [--plot OUT.png] [--noise table4.1|datasheet|none] [--reference-noise NAME]\n"
+         "         [--poses N]\n"
          "         [--bin M] [--repeatability W] [--centre X,Y] [--disk] [--probe M] [--quiet]\n"
          "         [--drive-speed M_PER_S] [--sparse-noise-floor M] [--diagnose] [--only T]\n"
          "--set NAME=VALUE: a refinement or sweep parameter (experiments): max_target_points,\n"
@@ -40,6 +41,8 @@ void usage() {
          "  max_iterations, plane_sweep_iterations, plane_sweep_passes, plane_sweep_coarse_points,\n"
          "  plane_sweep_fine_points, plane_sweep_fine_iterations, sparse_extrapolation_steps,\n"
          "  sparse_final_iterations, coarse_restarts\n"
+         "--reference-noise NAME: the reference sensor's noise profile instead of --noise's (the\n"
+         "  same random streams: only that sensor's noise differs)\n"
          "--only T: run trial T alone (0-based; the same data and seeds as in the full run)\n"
          "--drive-speed: the vehicle's speed between poses; a 2D ladar scans at its own rate\n"
          "  along the way (default 2 m/s; 0 = 20 scans per segment, the old set-up)\n"
@@ -312,7 +315,7 @@ void printDiagnosis(const cal::ExperimentTrial& trial, const cal::CalibrationPar
 
 int main(int argc, char** argv) {
   std::string pair_name = "velodyne-velodyne", method = cal::defaultMethod(), world_name = "thesis";
-  std::string json_path, plot_path, noise_name = "table4.1";
+  std::string json_path, plot_path, noise_name = "table4.1", reference_noise_name;
   int trials = 10, poses = 10, windows = 0, only = -1;
   uint64_t seed = 1;
   double bin = -1, probe = -1, centre_x = 0, centre_y = 0;
@@ -342,6 +345,7 @@ int main(int argc, char** argv) {
       else if (a == "--json") json_path = value("--json");
       else if (a == "--plot") plot_path = value("--plot");
       else if (a == "--noise") noise_name = value("--noise");
+      else if (a == "--reference-noise") reference_noise_name = value("--reference-noise");
       else if (a == "--poses") poses = std::stoi(value("--poses"));
       else if (a == "--bin") bin = std::stod(value("--bin"));
       else if (a == "--repeatability") windows = std::stoi(value("--repeatability"));
@@ -411,6 +415,13 @@ int main(int argc, char** argv) {
   if (!sim::noiseProfileFromName(noise_name, &options.noise)) {
     std::cerr << "unknown noise profile '" << noise_name << "'\n";
     return 2;
+  }
+  if (!reference_noise_name.empty()) {
+    options.reference_noise_set = true;
+    if (!sim::noiseProfileFromName(reference_noise_name, &options.reference_noise)) {
+      std::cerr << "unknown noise profile '" << reference_noise_name << "'\n";
+      return 2;
+    }
   }
   sim::World world;
   if (!sim::makeStandardWorld(world_name, static_cast<uint32_t>(seed), &world, &error)) {

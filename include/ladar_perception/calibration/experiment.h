@@ -51,6 +51,10 @@ struct ExperimentOptions {
   double drive_speed = 2.0;
   int sick_scans_per_pose = 20;
   sim::NoiseProfile noise = sim::NoiseProfile::kTable41;
+  // The reference sensor's noise instead of `noise` (experiments: which sensor's noise an error
+  // comes from); the random streams are the same, so only the noise differs.
+  bool reference_noise_set = false;
+  sim::NoiseProfile reference_noise = sim::NoiseProfile::kTable41;
   Pose6 guess_offset = (Pose6() << 1.0, 1.0, 1.0, 0.2, 0.2, 0.2).finished();  // uniform +-
 };
 

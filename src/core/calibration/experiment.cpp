@@ -142,7 +142,9 @@ bool makeTrial(const sim::World& world, const PairSetup& pair, const ExperimentO
           vehicle = world.vehiclePose(p.x(), p.y(), yaw_a + f * wrapAngle(yaw_b - yaw_a));
         }
         stream = sim::mix64(stream + 1);
-        if (!simulateSensor(world, s, vehicle, options.noise, stream, &points, error)) return false;
+        const sim::NoiseProfile noise =
+            side == 0 && options.reference_noise_set ? options.reference_noise : options.noise;
+        if (!simulateSensor(world, s, vehicle, noise, stream, &points, error)) return false;
         set.addScan(segment_start + (sweep ? r / sick_rate : 0.0), vehicle, points);
       }
     }
