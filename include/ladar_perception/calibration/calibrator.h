@@ -95,6 +95,9 @@ struct CalibrationParams {
   // 6 fine iterations: 4 put a trial of seed 1 on a wrong member (z 0.19 m off) and one of seed 2
   // (z 0.50 m off, a failure); 5 moved seed 2's worst x to 0.083 m for ~2% less CPU.
   int plane_sweep_fine_iterations = 6;
+  // Members of the later passes are comparable (reused by a walking pass, fitted by the
+  // parabola) only when their x and y agree within this [m] (after the rotation between them).
+  double plane_sweep_consistency = 0.15;
   // 2D targets: the final refinement after the sweep (started from its converged member) stops
   // after this many iterations (0 = the refinement's max_iterations). 14 instead of 20 moved the
   // benchmark's trials by at most 1 cm (in y, about as often towards the truth as away) and left

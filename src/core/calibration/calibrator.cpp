@@ -379,6 +379,13 @@ CalibrationResult calibrateAttempt(const CalibrationInput& input,
     };
     std::vector<Profiled> profile;
     double base = 0.0;  // the rotation of `estimate` from the first pass's best member
+    // Members compare only when refined alike in x and y: a member refined before they
+    // converged (the coarse estimate may be a metre off in x, and a later pass's member then
+    // converges and scores a quarter as much) must not be reused for, or fitted with, members
+    // refined after (plane_sweep_consistency).
+    const auto converged_alike = [&](const Pose6& a, const Pose6& b) {
+      return (a.head<2>() - b.head<2>()).cwiseAbs().maxCoeff() <= params.plane_sweep_consistency;
+    };
     for (int pass = 0; pass < passes && !cancelled; ++pass) {
       const double spacing = steps == 1 ? 0.0 : 2.0 * range / (steps - 1);
       std::vector<double> costs(steps, std::numeric_limits<double>::infinity());
@@ -397,7 +404,8 @@ CalibrationResult calibrateAttempt(const CalibrationInput& input,
         bool kept = angle == 0.0 && pass > 1;
         if (kept) costs[k] = kept_cost;
         for (const Profiled& m : profile) {  // a walking pass meets members already refined
-          if (pass > 0 && !kept && std::abs(m.angle - (base + angle)) < 1e-9) {
+          if (pass > 0 && !kept && std::abs(m.angle - (base + angle)) < 1e-9 &&
+              converged_alike(m.pose, candidate)) {
             costs[k] = m.cost;
             members[k] = m.pose;
             kept = true;
@@ -406,7 +414,12 @@ CalibrationResult calibrateAttempt(const CalibrationInput& input,
         if (!kept) costs[k] = member(candidate, pass > 0, &members[k]);
         if (std::isfinite(costs[k])) out.plane_sweep.emplace_back(angle, costs[k]);
         if (pass > 0 && !kept && std::isfinite(costs[k])) {
-          profile.push_back({base + angle, costs[k], members[k]});
+          // A member refined again replaces its stale profile entry.
+          const double at = base + angle;
+          profile.erase(std::remove_if(profile.begin(), profile.end(),
+                                       [at](const Profiled& m) { return std::abs(m.angle - at) < 1e-9; }),
+                        profile.end());
+          profile.push_back({at, costs[k], members[k]});
         }
         if (std::isfinite(costs[k]) && (best_k < 0 || costs[k] < costs[best_k])) best_k = k;
       }
@@ -428,6 +441,15 @@ CalibrationResult calibrateAttempt(const CalibrationInput& input,
     // The minimum of the least-squares parabola through the whole fine profile (not only the
     // last pass's three members: the members differ by a few 1e-5 of a cost of ~1e-3, about
     // their own noise, and the three alone put the minimum up to 0.007 rad off).
+    // The profile's members refined alike with the best one (compared with it rotated to theirs).
+    profile.erase(std::remove_if(profile.begin(), profile.end(),
+                                 [&](const Profiled& m) {
+                                   Pose6 expected;
+                                   return rotateAboutGroundLine(estimate, m.angle - base,
+                                                                params.ground_z, &expected) &&
+                                          !converged_alike(m.pose, expected);
+                                 }),
+                  profile.end());
     if (!cancelled && profile.size() >= 4) {
       Eigen::Matrix3d ata = Eigen::Matrix3d::Zero();
       Eigen::Vector3d atb = Eigen::Vector3d::Zero();
