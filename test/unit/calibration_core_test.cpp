@@ -431,6 +431,38 @@ TEST(CalibrationScanPlane, RotationAboutTheGroundLineKeepsGroundReturns) {
   EXPECT_FALSE(cal::rotateAboutGroundLine(cal::makePose(1, 0, 2.0, 0, 0, 0), 0.1, 0.0, &moved));
 }
 
+// The sweep's profile along the ground-line family: a member refined before x converged (the
+// coarse estimate a metre off in x: it scores several times higher whatever its rotation) is not
+// comparable with those refined after, and must not bend the parabola that places the minimum.
+TEST(CalibrationScanPlane, SweepProfileFitsOnlyMembersRefinedAlike) {
+  const auto member = [](double angle, double x_offset) {
+    cal::SweepMember m;
+    m.angle = angle;
+    EXPECT_TRUE(cal::rotateAboutGroundLine(kSick, angle, 0.0, &m.pose));
+    m.pose[cal::kX] += x_offset;
+    m.cost = 1e-3 + 0.5 * (angle - 0.005) * (angle - 0.005) + (x_offset != 0 ? 4e-3 : 0.0);
+    return m;
+  };
+  const cal::SweepMember best = member(0.0, 0.0);
+  std::vector<cal::SweepMember> profile = {member(-0.025, 0.8), member(-0.0125, 0.0), best,
+                                           member(0.0125, 0.0)};
+  EXPECT_TRUE(cal::refinedAlike(best, profile[1], 0.0, 0.15));
+  EXPECT_TRUE(cal::refinedAlike(profile[3], best, 0.0, 0.15));  // x moves with the rotation
+  EXPECT_FALSE(cal::refinedAlike(best, profile[0], 0.0, 0.15));
+  double minimum = 0;
+  std::size_t nearest = 99;
+  ASSERT_TRUE(cal::sweepProfileMinimum(profile, best, 0.0, 0.15, &minimum, &nearest));
+  EXPECT_NEAR(minimum, 0.005, 1e-9);  // the three alike members' parabola
+  EXPECT_EQ(nearest, 2u);
+  // With the stale member fitted too, the minimum moves by a quarter of the members' spacing
+  // (0.0035 rad: 3.5 cm in z at this mount).
+  ASSERT_TRUE(cal::sweepProfileMinimum(profile, best, 0.0, 1e9, &minimum, &nearest));
+  EXPECT_GT(std::abs(minimum - 0.005), 0.003);
+  // Fewer than three alike members: no parabola.
+  profile.pop_back();
+  EXPECT_FALSE(cal::sweepProfileMinimum(profile, best, 0.0, 0.15, &minimum, &nearest));
+}
+
 // A 2D ladar's range noise moves its ground returns along their rays: weighted by the reference
 // alone, the residual shrinks as the scan plane flattens (u . n -> 0), so the flatter member of
 // the ground-line family scores better than the truth; with the range noise in the weighting

@@ -7,6 +7,9 @@
 // lying in the ground plane), so the calibrator searches the family explicitly.
 #pragma once
 
+#include <cstddef>
+#include <vector>
+
 #include "ladar_perception/calibration/pose.h"
 
 namespace ladar_perception {
@@ -30,6 +33,26 @@ bool groundLineStepDirection(const Pose6& extrinsic, double ground_z, Pose6* dir
 // a sensor that returned ground points. True when `extrinsic` is such a mount. A plane parallel
 // to the ground above it (never meeting it within range) is fine.
 bool grazesGround(const Pose6& extrinsic, double ground_z, double min_incidence, double max_range);
+
+// A member of the calibrator's sweep along that family: its rotation about the ground line (from
+// a fixed member), its score and its pose refined with that rotation held.
+struct SweepMember {
+  double angle = 0.0;
+  double cost = 0.0;
+  Pose6 pose = Pose6::Zero();
+};
+
+// True when two members were refined alike, i.e. are comparable: their x and y agree within
+// `tolerance` [m] once `a` is rotated to `b`'s angle. (A member refined before x and y converged
+// scores several times higher than one refined after, whatever its rotation.)
+bool refinedAlike(const SweepMember& a, const SweepMember& b, double ground_z, double tolerance);
+
+// The rotation at the minimum of the least-squares parabola cost(angle) through the members
+// refined alike with `best` (refinedAlike), clamped to their range; *nearest is the index of the
+// member of those closest to it. False when fewer than three remain or the parabola has no
+// minimum.
+bool sweepProfileMinimum(const std::vector<SweepMember>& members, const SweepMember& best,
+                         double ground_z, double tolerance, double* minimum, std::size_t* nearest);
 
 }  // namespace calibration
 }  // namespace ladar_perception

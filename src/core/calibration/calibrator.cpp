@@ -372,20 +372,12 @@ CalibrationResult calibrateAttempt(const CalibrationInput& input,
     int passes = std::max(1, params.plane_sweep_passes);
     int walks = 0;
     // The later passes' members (converged in the other DOFs, on the same target), by their
-    // rotation from the first pass's best member: the profile the minimum is placed in.
-    struct Profiled {
-      double angle, cost;
-      Pose6 pose;
-    };
-    std::vector<Profiled> profile;
+    // rotation from the first pass's best member: the profile the minimum is placed in. Members
+    // compare only when refined alike (refinedAlike, plane_sweep_consistency): the coarse
+    // estimate may be a metre off in x, and a member refined before x converged must not be
+    // reused for, or fitted with, those refined after.
+    std::vector<SweepMember> profile;
     double base = 0.0;  // the rotation of `estimate` from the first pass's best member
-    // Members compare only when refined alike in x and y: a member refined before they
-    // converged (the coarse estimate may be a metre off in x, and a later pass's member then
-    // converges and scores a quarter as much) must not be reused for, or fitted with, members
-    // refined after (plane_sweep_consistency).
-    const auto converged_alike = [&](const Pose6& a, const Pose6& b) {
-      return (a.head<2>() - b.head<2>()).cwiseAbs().maxCoeff() <= params.plane_sweep_consistency;
-    };
     for (int pass = 0; pass < passes && !cancelled; ++pass) {
       const double spacing = steps == 1 ? 0.0 : 2.0 * range / (steps - 1);
       std::vector<double> costs(steps, std::numeric_limits<double>::infinity());
@@ -403,9 +395,10 @@ CalibrationResult calibrateAttempt(const CalibrationInput& input,
         // pass scores the thinner target: its best member is refined again on the fine one).
         bool kept = angle == 0.0 && pass > 1;
         if (kept) costs[k] = kept_cost;
-        for (const Profiled& m : profile) {  // a walking pass meets members already refined
+        for (const SweepMember& m : profile) {  // a walking pass meets members already refined
           if (pass > 0 && !kept && std::abs(m.angle - (base + angle)) < 1e-9 &&
-              converged_alike(m.pose, candidate)) {
+              refinedAlike(m, {base + angle, 0.0, candidate}, params.ground_z,
+                           params.plane_sweep_consistency)) {
             costs[k] = m.cost;
             members[k] = m.pose;
             kept = true;
@@ -417,7 +410,7 @@ CalibrationResult calibrateAttempt(const CalibrationInput& input,
           // A member refined again replaces its stale profile entry.
           const double at = base + angle;
           profile.erase(std::remove_if(profile.begin(), profile.end(),
-                                       [at](const Profiled& m) { return std::abs(m.angle - at) < 1e-9; }),
+                                       [at](const SweepMember& m) { return std::abs(m.angle - at) < 1e-9; }),
                         profile.end());
           profile.push_back({at, costs[k], members[k]});
         }
@@ -438,44 +431,21 @@ CalibrationResult calibrateAttempt(const CalibrationInput& input,
       range = 0.5 * spacing;
       steps = 3;
     }
-    // The minimum of the least-squares parabola through the whole fine profile (not only the
-    // last pass's three members: the members differ by a few 1e-5 of a cost of ~1e-3, about
-    // their own noise, and the three alone put the minimum up to 0.007 rad off).
-    // The profile's members refined alike with the best one (compared with it rotated to theirs).
-    profile.erase(std::remove_if(profile.begin(), profile.end(),
-                                 [&](const Profiled& m) {
-                                   Pose6 expected;
-                                   return rotateAboutGroundLine(estimate, m.angle - base,
-                                                                params.ground_z, &expected) &&
-                                          !converged_alike(m.pose, expected);
-                                 }),
-                  profile.end());
-    if (!cancelled && profile.size() >= 4) {
-      Eigen::Matrix3d ata = Eigen::Matrix3d::Zero();
-      Eigen::Vector3d atb = Eigen::Vector3d::Zero();
-      double lo = profile[0].angle, hi = lo;
-      for (const Profiled& m : profile) {
-        const Eigen::Vector3d row(m.angle * m.angle, m.angle, 1.0);
-        ata += row * row.transpose();
-        atb += m.cost * row;
-        lo = std::min(lo, m.angle);
-        hi = std::max(hi, m.angle);
-      }
-      const Eigen::Vector3d abc = ata.ldlt().solve(atb);
-      if (abc.allFinite() && abc[0] > 0) {
-        const double minimum = std::max(lo, std::min(hi, -0.5 * abc[1] / abc[0]));
-        const Profiled* nearest = &profile[0];
-        for (const Profiled& m : profile) {
-          if (std::abs(m.angle - minimum) < std::abs(nearest->angle - minimum)) nearest = &m;
-        }
-        Pose6 moved, refined;
-        if (std::abs(minimum - nearest->angle) < 1e-6) {
-          estimate = nearest->pose;
-        } else if (rotateAboutGroundLine(nearest->pose, minimum - nearest->angle, params.ground_z,
-                                         &moved) &&
-                   std::isfinite(member(moved, true, &refined))) {
-          estimate = refined;
-        }
+    // The minimum of the least-squares parabola through the fine profile's members refined
+    // alike with the best one (not only the last pass's three members: the members differ by a
+    // few 1e-5 of a cost of ~1e-3, about their own noise, and the three alone put the minimum up
+    // to 0.007 rad off).
+    double minimum = 0.0;
+    std::size_t nearest = 0;
+    if (!cancelled && sweepProfileMinimum(profile, {base, kept_cost, estimate}, params.ground_z,
+                                          params.plane_sweep_consistency, &minimum, &nearest)) {
+      const SweepMember& m = profile[nearest];
+      Pose6 moved, refined;
+      if (std::abs(minimum - m.angle) < 1e-6) {
+        estimate = m.pose;
+      } else if (rotateAboutGroundLine(m.pose, minimum - m.angle, params.ground_z, &moved) &&
+                 std::isfinite(member(moved, true, &refined))) {
+        estimate = refined;
       }
     }
     out.trace.push_back(estimate);

@@ -1,5 +1,6 @@
 #include "ladar_perception/calibration/scan_plane.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace ladar_perception {
@@ -55,6 +56,45 @@ bool grazesGround(const Pose6& extrinsic, double ground_z, double min_incidence,
   // The scan plane meets the ground at distance height / sin(tilt) from the sensor.
   const double height = std::abs(t.translation().z() - ground_z);
   return height < max_range * std::sin(tilt) || height < 1e-3;
+}
+
+bool refinedAlike(const SweepMember& a, const SweepMember& b, double ground_z, double tolerance) {
+  Pose6 rotated = a.pose;
+  if (std::abs(b.angle - a.angle) > 0 &&
+      !rotateAboutGroundLine(a.pose, b.angle - a.angle, ground_z, &rotated)) {
+    return false;
+  }
+  return (rotated.head<2>() - b.pose.head<2>()).cwiseAbs().maxCoeff() <= tolerance;
+}
+
+bool sweepProfileMinimum(const std::vector<SweepMember>& members, const SweepMember& best,
+                         double ground_z, double tolerance, double* minimum, std::size_t* nearest) {
+  Eigen::Matrix3d ata = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d atb = Eigen::Vector3d::Zero();
+  double lo = 0, hi = 0;
+  int used = 0;
+  for (const SweepMember& m : members) {
+    if (!refinedAlike(best, m, ground_z, tolerance)) continue;
+    const Eigen::Vector3d row(m.angle * m.angle, m.angle, 1.0);
+    ata += row * row.transpose();
+    atb += m.cost * row;
+    lo = used == 0 ? m.angle : std::min(lo, m.angle);
+    hi = used == 0 ? m.angle : std::max(hi, m.angle);
+    ++used;
+  }
+  if (used < 3) return false;
+  const Eigen::Vector3d abc = ata.ldlt().solve(atb);
+  if (!abc.allFinite() || !(abc[0] > 0)) return false;
+  *minimum = std::max(lo, std::min(hi, -0.5 * abc[1] / abc[0]));
+  bool found = false;
+  for (std::size_t i = 0; i < members.size(); ++i) {
+    if (!refinedAlike(best, members[i], ground_z, tolerance)) continue;
+    if (!found || std::abs(members[i].angle - *minimum) < std::abs(members[*nearest].angle - *minimum)) {
+      *nearest = i;
+      found = true;
+    }
+  }
+  return true;
 }
 
 }  // namespace calibration
