@@ -69,30 +69,28 @@ bool refinedAlike(const SweepMember& a, const SweepMember& b, double ground_z, d
 
 bool sweepProfileMinimum(const std::vector<SweepMember>& members, const SweepMember& best,
                          double ground_z, double tolerance, double* minimum, std::size_t* nearest) {
+  std::vector<std::size_t> alike;
+  for (std::size_t i = 0; i < members.size(); ++i) {
+    if (refinedAlike(best, members[i], ground_z, tolerance)) alike.push_back(i);
+  }
+  if (alike.size() < 3) return false;
   Eigen::Matrix3d ata = Eigen::Matrix3d::Zero();
   Eigen::Vector3d atb = Eigen::Vector3d::Zero();
-  double lo = 0, hi = 0;
-  int used = 0;
-  for (const SweepMember& m : members) {
-    if (!refinedAlike(best, m, ground_z, tolerance)) continue;
+  double lo = members[alike[0]].angle, hi = lo;
+  for (std::size_t i : alike) {
+    const SweepMember& m = members[i];
     const Eigen::Vector3d row(m.angle * m.angle, m.angle, 1.0);
     ata += row * row.transpose();
     atb += m.cost * row;
-    lo = used == 0 ? m.angle : std::min(lo, m.angle);
-    hi = used == 0 ? m.angle : std::max(hi, m.angle);
-    ++used;
+    lo = std::min(lo, m.angle);
+    hi = std::max(hi, m.angle);
   }
-  if (used < 3) return false;
   const Eigen::Vector3d abc = ata.ldlt().solve(atb);
   if (!abc.allFinite() || !(abc[0] > 0)) return false;
   *minimum = std::max(lo, std::min(hi, -0.5 * abc[1] / abc[0]));
-  bool found = false;
-  for (std::size_t i = 0; i < members.size(); ++i) {
-    if (!refinedAlike(best, members[i], ground_z, tolerance)) continue;
-    if (!found || std::abs(members[i].angle - *minimum) < std::abs(members[*nearest].angle - *minimum)) {
-      *nearest = i;
-      found = true;
-    }
+  *nearest = alike[0];
+  for (std::size_t i : alike) {
+    if (std::abs(members[i].angle - *minimum) < std::abs(members[*nearest].angle - *minimum)) *nearest = i;
   }
   return true;
 }
