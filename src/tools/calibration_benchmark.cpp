@@ -40,7 +40,8 @@ void usage() {
          "  target_voxel, reference_voxel, huber, normal_neighbours, max_correspondence_end,\n"
          "  max_iterations, plane_sweep_iterations, plane_sweep_passes, plane_sweep_coarse_points,\n"
          "  plane_sweep_fine_points, plane_sweep_fine_iterations, sparse_extrapolation_steps,\n"
-         "  sparse_final_iterations, coarse_restarts, plane_sweep_consistency\n"
+         "  sparse_final_iterations, coarse_restarts, plane_sweep_consistency,\n"
+         "  sparse_level_keep_every, sparse_level_normal_z, sparse_level_extrapolation_steps\n"
          "--reference-noise NAME: the reference sensor's noise profile instead of --noise's (the\n"
          "  same random streams: only that sensor's noise differs)\n"
          "--only T: run trial T alone (0-based; the same data and seeds as in the full run)\n"
@@ -454,6 +455,9 @@ int main(int argc, char** argv) {
     else if (k == "plane_sweep_fine_iterations") params.plane_sweep_fine_iterations = static_cast<int>(v);
     else if (k == "sparse_extrapolation_steps") params.sparse_extrapolation_steps = static_cast<int>(v);
     else if (k == "sparse_final_iterations") params.sparse_final_iterations = static_cast<int>(v);
+    else if (k == "sparse_level_keep_every") params.sparse_level_keep_every = static_cast<int>(v);
+    else if (k == "sparse_level_normal_z") params.sparse_level_normal_z = v;
+    else if (k == "sparse_level_extrapolation_steps") params.sparse_level_extrapolation_steps = static_cast<int>(v);
     else if (k == "coarse_restarts") params.coarse_restarts = static_cast<int>(v);
     else if (k == "plane_sweep_consistency") params.plane_sweep_consistency = v;
     else {

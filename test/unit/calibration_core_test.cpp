@@ -245,6 +245,38 @@ TEST(CalibrationRefinement, PointToPlaneRecoversOffsetOnHills) {
   for (int i = 3; i < 6; ++i) EXPECT_LT(std::abs(err[i]), 0.003) << cal::dofName(i);
 }
 
+TEST(CalibrationRefinement, NormalSpaceThinningKeepsFacesAndOneInNOfTheGround) {
+  // Level ground and a wall across x = 10 m; the target sees both from the same place.
+  cal::PointVector reference, ground, wall;
+  for (double x = 0.0; x <= 12.0; x += 0.2) {
+    for (double y = -5.0; y <= 5.0; y += 0.2) reference.emplace_back(x, y, 0.0f);
+  }
+  for (double y = -5.0; y <= 5.0; y += 0.2) {
+    for (double z = 0.6; z <= 3.0; z += 0.2) reference.emplace_back(10.0f, y, z);
+  }
+  for (double x = 1.05; x <= 9.0; x += 0.1) {
+    for (double y = -4.0; y <= 4.0; y += 0.5) ground.emplace_back(x, y, 0.01f);
+  }
+  for (double y = -4.0; y <= 4.0; y += 0.1) wall.emplace_back(9.98f, y, 1.5f);
+  cal::PointVector both = ground;
+  both.insert(both.end(), wall.begin(), wall.end());
+  cal::ScanSet target;
+  target.addScan(0.0, Eigen::Isometry3d::Identity(), both);
+  cal::RefinementParams rp;
+  rp.reference_voxel = 0.2;
+  cal::SurfaceModel model;
+  model.build(reference, rp);
+  const cal::Pose6 at = cal::Pose6::Zero();
+  const cal::ScanSet thinned = cal::thinLevelSurfaceReturns(model, target, at, 0.5, 0.8, 4);
+  ASSERT_EQ(thinned.numScans(), 1u);
+  std::size_t kept_ground = 0, kept_wall = 0;
+  for (const Eigen::Vector3f& p : thinned.points) (p.x() > 9.5f ? kept_wall : kept_ground)++;
+  EXPECT_EQ(kept_wall, wall.size());  // every return on the face
+  EXPECT_EQ(kept_ground, (ground.size() + 3) / 4);  // one in four on the level ground
+  // keep_every 1 is the identity.
+  EXPECT_EQ(cal::thinLevelSurfaceReturns(model, target, at, 0.5, 0.8, 1).numPoints(), both.size());
+}
+
 TEST(CalibrationObservability, FlatPlaneAndAlleyAreNamed) {
   cal::Matrix6 h = cal::Matrix6::Zero();
   h.diagonal() << 1e-6, 1e-6, 100, 80, 90, 1e-7;  // a plane: only z, roll, pitch constrained

@@ -103,6 +103,13 @@ struct CalibrationParams {
   // benchmark's trials by at most 1 cm (in y, about as often towards the truth as away) and left
   // the worst errors of seeds 1-3 within 2 mm, for ~0.5 s CPU less.
   int sparse_final_iterations = 14;
+  // 2D targets: the final refinement uses the target thinned in normal space (thinLevelSurfaceReturns at the sweep's member): of the returns on near-level
+  // surfaces (|n_z| >= sparse_level_normal_z) one in sparse_level_keep_every is kept. 1 = off.
+  int sparse_level_keep_every = 10;
+  double sparse_level_normal_z = 0.8;
+  // ... and extrapolates its steps at most this many times (sparse_extrapolation_steps' 5 made
+  // it overshoot back and forth in x on the thinned target: seed 1's trial 7 ended 0.23 m off).
+  int sparse_level_extrapolation_steps = 2;
   double ground_z = 0.0;             // the ground's height in base_link [m]
   // 2D targets: hypotheses whose scan plane meets the ground within target_max_range at less than
   // this incidence are impossible (grazesGround, scan_plane.h) and score infinity. 0 = off.

@@ -138,6 +138,15 @@ Pose6 applyStep(const Pose6& extrinsic, const Pose6& step);
 // The target scans thinned for the refinement (voxel per scan, then evenly to max_target_points).
 ScanSet refinementTarget(const ScanSet& target, const RefinementParams& params);
 
+// Normal-space thinning (the simplest form of Rusinkiewicz and Levoy's normal-space sampling):
+// the target points whose closest surface point at `extrinsic` (within max_correspondence) has a
+// near-vertical normal (|n_z| >= min_normal_z, odom frame) are kept one in keep_every, in scan
+// order; every other point is kept. A tilted 2D ladar puts two thirds of its returns on the
+// ground: thinned, the ground no longer outweighs the few returns on faces that fix x and y.
+ScanSet thinLevelSurfaceReturns(const SurfaceModel& model, const ScanSet& target,
+                                const Pose6& extrinsic, double max_correspondence,
+                                double min_normal_z, int keep_every);
+
 RefinementResult refine(const SurfaceModel& model, const ScanSet& target, const Pose6& initial,
                         const RefinementParams& params, const ProgressFn& progress = nullptr);
 

@@ -459,16 +459,30 @@ CalibrationResult calibrateAttempt(const CalibrationInput& input,
       out.plane_sweep.empty() && params.coarse_restarts > 0) {
     return restartCoarseSearch();
   }
+  // The final refinement's target: a 2D ladar's, thinned in normal space at the sweep's member
+  // (CalibrationParams::sparse_level_keep_every).
+  ScanSet level_thinned;
+  const ScanSet* final_target = &target;
+  if (!cancelled && sparse && !out.plane_sweep.empty() && params.sparse_level_keep_every > 1) {
+    level_thinned = thinLevelSurfaceReturns(model, target, estimate,
+                                            params.refinement.max_correspondence_end,
+                                            params.sparse_level_normal_z,
+                                            params.sparse_level_keep_every);
+    final_target = &level_thinned;
+  }
+  double swept_member_moved = 0;  // [m] in x and y, by the final refinement
   if (!cancelled && (refine_only || params.method == "coarse_to_fine")) {
     RefinementParams rp = params.refinement;
     if (sparse && !out.plane_sweep.empty()) {
       rp.max_correspondence_start = rp.max_correspondence_end;  // already on the right member
       if (params.sparse_final_iterations > 0) rp.max_iterations = params.sparse_final_iterations;
+      if (final_target != &target) rp.extrapolation_steps = params.sparse_level_extrapolation_steps;
       if (!groundLineStepDirection(estimate, params.ground_z, &rp.frozen_direction)) {
         rp.frozen_direction.setZero();
       }
     }
-    out.refinement = refine(model, target, estimate, rp, progress);
+    out.refinement = refine(model, *final_target, estimate, rp, progress);
+    swept_member_moved = (out.refinement.extrinsic.head<2>() - estimate.head<2>()).norm();
     cancelled = out.refinement.cancelled;
     estimate = out.refinement.extrinsic;
     out.trace.insert(out.trace.end(), out.refinement.trace.begin(), out.refinement.trace.end());
@@ -477,9 +491,15 @@ CalibrationResult calibrateAttempt(const CalibrationInput& input,
     out.final_cost = lin.cost;
   }
   // A solution outside the search region: the coarse search settled in a wrong basin, and it
-  // restarts with its next seed before the observability check is spent on it.
+  // restarts with its next seed before the observability check is spent on it. So does a 2D
+  // ladar's solution that the final refinement moved farther in x and y from the sweep's member
+  // than the members refined alike differ (plane_sweep_consistency): that member had not
+  // converged, and the sweep was run from a wrong basin (seed 3's trial 0: 1.6 m off in x).
   const bool outside = !insideRegion(estimate, params);
-  if (outside && !cancelled && params.method == "coarse_to_fine" && params.coarse_restarts > 0) {
+  const bool member_unconverged = sparse && !out.plane_sweep.empty() &&
+                                  swept_member_moved > params.plane_sweep_consistency;
+  if ((outside || member_unconverged) && !cancelled && params.method == "coarse_to_fine" &&
+      params.coarse_restarts > 0) {
     return restartCoarseSearch();
   }
   // The curvature means something only at a minimum of the dense cost. A search method that is
@@ -495,6 +515,10 @@ CalibrationResult calibrateAttempt(const CalibrationInput& input,
     at = refine(model, target, estimate, rp).extrinsic;
     to_minimum = poseDifference(at, estimate);
     lin = linearise(model, target, at, params.refinement.max_correspondence_end, params.refinement);
+  } else if (!cancelled && final_target != &target) {
+    // The check reads the whole target (what the data can fix), not the refinement's thinned one.
+    lin = linearise(model, target, estimate, params.refinement.max_correspondence_end,
+                    params.refinement);
   } else if (!cancelled) {
     // lin is the refinement's linearisation at the solution.
   } else {

@@ -182,6 +182,36 @@ ScanSet refinementTarget(const ScanSet& target, const RefinementParams& params) 
                    static_cast<std::size_t>(std::max(0, params.max_target_points)));
 }
 
+ScanSet thinLevelSurfaceReturns(const SurfaceModel& model, const ScanSet& target,
+                                const Pose6& extrinsic, double max_correspondence,
+                                double min_normal_z, int keep_every) {
+  if (keep_every <= 1 || model.empty()) return target;
+  const Eigen::Isometry3d t_bs = toIsometry(extrinsic);
+  const float max2 = static_cast<float>(max_correspondence * max_correspondence);
+  const float nz_min = static_cast<float>(min_normal_z);
+  ScanSet out;
+  out.points.reserve(target.numPoints());
+  PointVector kept;
+  long level = 0;
+  for (std::size_t k = 0; k < target.numScans(); ++k) {
+    const Eigen::Isometry3d t_os = target.vehicle_poses[k] * t_bs;
+    const Eigen::Matrix3f r_os = t_os.linear().cast<float>();
+    const Eigen::Vector3f p_os = t_os.translation().cast<float>();
+    kept.clear();
+    for (uint32_t i = target.scan_begin[k]; i < target.scan_begin[k + 1]; ++i) {
+      const Eigen::Vector3f& ps = target.points[i];
+      float d2 = 0;
+      const int j = model.tree().nearest(r_os * ps + p_os, &d2, max2);
+      if (j >= 0 && std::abs(model.normals()[j].z()) >= nz_min && level++ % keep_every != 0) {
+        continue;
+      }
+      kept.push_back(ps);
+    }
+    out.addScan(target.stamps[k], target.vehicle_poses[k], kept);
+  }
+  return out;
+}
+
 RefinementResult refine(const SurfaceModel& model, const ScanSet& target, const Pose6& initial,
                         const RefinementParams& params, const ProgressFn& progress) {
   RefinementResult res;
