@@ -144,6 +144,58 @@ TEST(CalibrationKdTree, MatchesBruteForce) {
   EXPECT_EQ(tree.nearest(Eigen::Vector3f(100, 100, 100), &d, 1.0f), -1);  // beyond max distance
 }
 
+TEST(CalibrationNearestGrid, MatchesBruteForceWithinItsRadius) {
+  // Points on a wavy surface (1 per ~0.2 m, like the surface model) and queries around it, some
+  // far from it, some with negative coordinates (cells below zero).
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> u(-6, 6);
+  std::normal_distribution<float> off(0.0f, 0.4f);
+  cal::PointVector pts;
+  for (int i = 0; i < 4000; ++i) {
+    const float x = u(rng), y = u(rng);
+    pts.emplace_back(x, y, 0.5f * std::sin(x) + 0.02f * off(rng));
+  }
+  cal::NearestGrid grid;
+  grid.build(pts, 0.5f);
+  cal::KdTree tree(pts);
+  int decided_far = 0;
+  for (int q = 0; q < 2000; ++q) {
+    const float x = u(rng), y = u(rng);
+    const Eigen::Vector3f query(x, y, 0.5f * std::sin(x) + off(rng));
+    for (const float max_d : {0.3f, 0.5f, 1.5f}) {
+      int best = -1;
+      float best_d2 = max_d * max_d;
+      for (std::size_t i = 0; i < pts.size(); ++i) {
+        const float d = (pts[i] - query).squaredNorm();
+        if (d < best_d2) { best_d2 = d; best = static_cast<int>(i); }
+      }
+      float got = 0;
+      const int j = grid.nearest(query, &got, max_d * max_d);
+      if (max_d <= 0.5f) {  // within the cell size: always decided, and exact
+        ASSERT_NE(j, cal::NearestGrid::kUndecided);
+        EXPECT_EQ(j, best) << q << " " << max_d;
+        EXPECT_FLOAT_EQ(got, best_d2);
+      } else if (j != cal::NearestGrid::kUndecided) {  // decided beyond it: only when found
+        EXPECT_EQ(j, best);
+        EXPECT_LE(got, 0.25f);
+        ++decided_far;
+      } else {
+        EXPECT_TRUE(best < 0 || best_d2 > 0.25f);
+        EXPECT_EQ(tree.nearest(query, &got, max_d * max_d), best);
+      }
+    }
+  }
+  EXPECT_GT(decided_far, 1000);  // most queries near the surface
+  float d = 0;
+  EXPECT_EQ(grid.nearest(Eigen::Vector3f(100, 100, 100), &d, 0.25f), -1);
+  EXPECT_FLOAT_EQ(d, 0.25f);
+  EXPECT_EQ(grid.nearest(Eigen::Vector3f(100, 100, 100), &d, 4.0f), cal::NearestGrid::kUndecided);
+  EXPECT_EQ(grid.nearest(Eigen::Vector3f(NAN, 0, 0), &d, 0.25f), cal::NearestGrid::kUndecided);
+  cal::NearestGrid empty;
+  empty.build({}, 0.5f);
+  EXPECT_EQ(empty.nearest(Eigen::Vector3f::Zero(), &d, 0.25f), -1);
+}
+
 TEST(CalibrationFeatures, LocalMaximaAndMinimaPerBin) {
   // Two bins of 2 m: [0,2)x[0,2) and [2,4)x[0,2).
   const cal::PointVector pts = {{0.5f, 0.5f, 1.0f}, {1.5f, 1.5f, 3.0f}, {1.0f, 0.2f, -1.0f},

@@ -10,6 +10,7 @@
 #include "ladar_perception/calibration/accumulation.h"
 #include "ladar_perception/calibration/error_metrics.h"
 #include "ladar_perception/calibration/features.h"
+#include "ladar_perception/calibration/nearest_grid.h"
 #include "ladar_perception/calibration/observability.h"
 #include "ladar_perception/calibration/pose.h"
 #include "ladar_perception/calibration/refinement.h"
@@ -175,6 +176,7 @@ class HypothesisCost {
   ScanSet target_;
   FeatureExtractor extractor_;
   KdTree ref_maxima_, ref_minima_, ref_points_;
+  NearestGrid ref_points_grid_;  // ref_points_ in raw_max_distance cells (NearestGrid)
   HeightGrid ref_grid_;
   PointVector accumulated_;
   FeatureSet features_;

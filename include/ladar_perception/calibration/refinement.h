@@ -16,6 +16,7 @@
 
 #include "ladar_perception/calibration/accumulation.h"
 #include "ladar_perception/calibration/kdtree.h"
+#include "ladar_perception/calibration/nearest_grid.h"
 #include "ladar_perception/calibration/pose.h"
 #include "ladar_perception/calibration/search.h"
 
@@ -81,6 +82,12 @@ class SurfaceModel {
   bool empty() const { return tree_.empty(); }
   std::size_t size() const { return points_.size(); }
   const KdTree& tree() const { return tree_; }
+  // Index of the closest surface point within sqrt(max_sq_dist), or -1 (KdTree::nearest's
+  // answer): from the grid of max_correspondence_end cells when it decides, else the KD-tree.
+  int nearest(const Eigen::Vector3f& query, float* sq_dist, float max_sq_dist) const {
+    const int j = grid_.nearest(query, sq_dist, max_sq_dist);
+    return j != NearestGrid::kUndecided ? j : tree_.nearest(query, sq_dist, max_sq_dist);
+  }
   const PointVector& points() const { return points_; }
   // Unit normal of a surface point; zero for an edge point (point-to-point).
   const PointVector& normals() const { return normals_; }
@@ -94,6 +101,7 @@ class SurfaceModel {
   std::vector<float> spreads_;
   int neighbours_ = 1;
   KdTree tree_;
+  NearestGrid grid_;
 };
 
 // The linearised problem at one hypothesis.

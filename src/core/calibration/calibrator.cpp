@@ -74,7 +74,9 @@ HypothesisCost::HypothesisCost(const CalibrationInput& input, const CalibrationP
   if (params_.metric == Metric::kClosestPointRaw) {
     target_ = thinScans(input.target, params.feature_voxel,
                         static_cast<std::size_t>(std::max(0, params.raw_max_points)));
-    ref_points_.build(voxelDownsample(reference, params.raw_reference_voxel));
+    const PointVector ref_points = voxelDownsample(reference, params.raw_reference_voxel);
+    ref_points_.build(ref_points);
+    ref_points_grid_.build(ref_points, static_cast<float>(params.raw_max_distance));
     valid_ = true;
     return;
   }
@@ -112,7 +114,9 @@ double HypothesisCost::operator()(const Pose6& target_extrinsic) {
     scratch_.resize(accumulated_.size());
     for (std::size_t i = 0; i < accumulated_.size(); ++i) {
       float d2 = cap2;
-      if (ref_points_.nearest(accumulated_[i], &d2, cap2) < 0) d2 = cap2;
+      int j = ref_points_grid_.nearest(accumulated_[i], &d2, cap2);
+      if (j == NearestGrid::kUndecided) j = ref_points_.nearest(accumulated_[i], &d2, cap2);
+      if (j < 0) d2 = cap2;
       scratch_[i] = d2;
     }
     return trimmedMean(&scratch_, params_.trim_fraction);

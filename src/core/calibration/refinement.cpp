@@ -59,6 +59,7 @@ void SurfaceModel::build(const PointVector& points, const RefinementParams& para
     spreads_.push_back(static_cast<float>(std::sqrt(std::max(0.0, ev[0]) / n)));
   }
   tree_.build(points_);
+  grid_.build(points_, static_cast<float>(std::max(0.05, params.max_correspondence_end)));
 }
 
 Linearisation linearise(const SurfaceModel& model, const ScanSet& target, const Pose6& extrinsic,
@@ -88,7 +89,7 @@ Linearisation linearise(const SurfaceModel& model, const ScanSet& target, const 
       const Eigen::Vector3f& ps = target.points[i];
       const Eigen::Vector3f po = r_os * ps + p_os;
       float d2 = 0;
-      const int j = model.tree().nearest(po, &d2, max2);
+      const int j = model.nearest(po, &d2, max2);
       if (j < 0) continue;
       const Eigen::Vector3d nrm = model.normals()[j].cast<double>();
       const Eigen::Vector3d lever = r_bs * ps.cast<double>();
@@ -201,7 +202,7 @@ ScanSet thinLevelSurfaceReturns(const SurfaceModel& model, const ScanSet& target
     for (uint32_t i = target.scan_begin[k]; i < target.scan_begin[k + 1]; ++i) {
       const Eigen::Vector3f& ps = target.points[i];
       float d2 = 0;
-      const int j = model.tree().nearest(r_os * ps + p_os, &d2, max2);
+      const int j = model.nearest(r_os * ps + p_os, &d2, max2);
       if (j >= 0 && std::abs(model.normals()[j].z()) >= nz_min && level++ % keep_every != 0) {
         continue;
       }
