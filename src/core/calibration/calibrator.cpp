@@ -561,6 +561,9 @@ CalibrationResult calibrateAttempt(const CalibrationInput& input,
     msg << "the scene cannot fix " << joinNames(out.unobservable)
         << " (cost curvature " << out.observability.relative_min
         << " of the strongest): their values are not determined by the data; the other DOFs are";
+  } else if (member_unconverged) {
+    msg << "the final refinement moved the ground-line sweep's member by " << swept_member_moved
+        << " m in x and y: the sweep did not converge (a wrong basin of the coarse search)";
   } else {
     out.success = true;
     msg << params.method << ": " << out.evaluations << " evaluations, final cost "
