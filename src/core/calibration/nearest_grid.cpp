@@ -10,7 +10,8 @@ namespace calibration {
 namespace {
 constexpr int32_t kCellRange = 1 << 20;  // cell coordinates within +-2^20 (+-524 km at 0.5 m)
 
-inline uint64_t hashKey(int64_t key) {  // splitmix64's finaliser: every key bit reaches the low bits
+// splitmix64's finaliser: every bit of the key reaches the low bits the table is indexed by.
+inline uint64_t hashKey(int64_t key) {
   uint64_t h = static_cast<uint64_t>(key);
   h = (h ^ (h >> 30)) * 0xBF58476D1CE4E5B9ULL;
   h = (h ^ (h >> 27)) * 0x94D049BB133111EBULL;
