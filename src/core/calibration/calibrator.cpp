@@ -463,11 +463,12 @@ CalibrationResult calibrateAttempt(const CalibrationInput& input,
       out.plane_sweep.empty() && params.coarse_restarts > 0) {
     return restartCoarseSearch();
   }
+  const bool after_sweep = sparse && !out.plane_sweep.empty();  // a 2D ladar's swept member
   // The final refinement's target: a 2D ladar's, thinned in normal space at the sweep's member
   // (CalibrationParams::sparse_level_keep_every).
   ScanSet level_thinned;
   const ScanSet* final_target = &target;
-  if (!cancelled && sparse && !out.plane_sweep.empty() && params.sparse_level_keep_every > 1) {
+  if (!cancelled && after_sweep && params.sparse_level_keep_every > 1) {
     level_thinned = thinLevelSurfaceReturns(model, target, estimate,
                                             params.refinement.max_correspondence_end,
                                             params.sparse_level_normal_z,
@@ -477,7 +478,7 @@ CalibrationResult calibrateAttempt(const CalibrationInput& input,
   double swept_member_moved = 0;  // [m] in x and y, by the final refinement
   if (!cancelled && (refine_only || params.method == "coarse_to_fine")) {
     RefinementParams rp = params.refinement;
-    if (sparse && !out.plane_sweep.empty()) {
+    if (after_sweep) {
       rp.max_correspondence_start = rp.max_correspondence_end;  // already on the right member
       if (params.sparse_final_iterations > 0) rp.max_iterations = params.sparse_final_iterations;
       if (final_target != &target) rp.extrapolation_steps = params.sparse_level_extrapolation_steps;
@@ -500,8 +501,8 @@ CalibrationResult calibrateAttempt(const CalibrationInput& input,
   // than the members refined alike differ (plane_sweep_consistency): that member had not
   // converged, and the sweep was run from a wrong basin (seed 3's trial 0: 1.6 m off in x).
   const bool outside = !insideRegion(estimate, params);
-  const bool member_unconverged = sparse && !out.plane_sweep.empty() &&
-                                  swept_member_moved > params.plane_sweep_consistency;
+  const bool member_unconverged =
+      after_sweep && swept_member_moved > params.plane_sweep_consistency;
   if ((outside || member_unconverged) && !cancelled && params.method == "coarse_to_fine" &&
       params.coarse_restarts > 0) {
     return restartCoarseSearch();

@@ -187,7 +187,8 @@ ScanSet thinLevelSurfaceReturns(const SurfaceModel& model, const ScanSet& target
                                 const Pose6& extrinsic, double max_correspondence,
                                 double min_normal_z, int keep_every) {
   if (keep_every <= 1 || model.empty()) return target;
-  const Eigen::Isometry3d t_bs = toIsometry(extrinsic);
+  PointVector projected;  // the target in the odom frame at `extrinsic`
+  accumulate(target, toIsometry(extrinsic), &projected);
   const float max2 = static_cast<float>(max_correspondence * max_correspondence);
   const float nz_min = static_cast<float>(min_normal_z);
   ScanSet out;
@@ -195,18 +196,14 @@ ScanSet thinLevelSurfaceReturns(const SurfaceModel& model, const ScanSet& target
   PointVector kept;
   long level = 0;
   for (std::size_t k = 0; k < target.numScans(); ++k) {
-    const Eigen::Isometry3d t_os = target.vehicle_poses[k] * t_bs;
-    const Eigen::Matrix3f r_os = t_os.linear().cast<float>();
-    const Eigen::Vector3f p_os = t_os.translation().cast<float>();
     kept.clear();
     for (uint32_t i = target.scan_begin[k]; i < target.scan_begin[k + 1]; ++i) {
-      const Eigen::Vector3f& ps = target.points[i];
       float d2 = 0;
-      const int j = model.nearest(r_os * ps + p_os, &d2, max2);
+      const int j = model.nearest(projected[i], &d2, max2);
       if (j >= 0 && std::abs(model.normals()[j].z()) >= nz_min && level++ % keep_every != 0) {
         continue;
       }
-      kept.push_back(ps);
+      kept.push_back(target.points[i]);
     }
     out.addScan(target.stamps[k], target.vehicle_poses[k], kept);
   }
