@@ -41,7 +41,8 @@ void usage() {
          "  max_iterations, plane_sweep_iterations, plane_sweep_passes, plane_sweep_coarse_points,\n"
          "  plane_sweep_fine_points, plane_sweep_fine_iterations, sparse_extrapolation_steps,\n"
          "  sparse_final_iterations, coarse_restarts, plane_sweep_consistency,\n"
-         "  sparse_level_keep_every, sparse_level_normal_z, sparse_level_extrapolation_steps\n"
+         "  sparse_level_keep_every, sparse_level_normal_z, sparse_level_extrapolation_steps,\n"
+         "  score_cluster\n"
          "--reference-noise NAME: the reference sensor's noise profile instead of --noise's (the\n"
          "  same random streams: only that sensor's noise differs)\n"
          "--only T: run trial T alone (0-based; the same data and seeds as in the full run)\n"
@@ -460,6 +461,7 @@ int main(int argc, char** argv) {
     else if (k == "sparse_level_extrapolation_steps") params.sparse_level_extrapolation_steps = static_cast<int>(v);
     else if (k == "coarse_restarts") params.coarse_restarts = static_cast<int>(v);
     else if (k == "plane_sweep_consistency") params.plane_sweep_consistency = v;
+    else if (k == "score_cluster") params.observability.score_cluster = v;
     else {
       std::cerr << "unknown --set parameter " << k << "\n";
       return 2;
@@ -480,6 +482,9 @@ int main(int argc, char** argv) {
   std::set<std::string> unobservable;
   std::vector<std::vector<cal::Pose6>> traces;
   int successes = 0;
+  // |error| / reported standard deviation of every observable DOF of every trial: how honest
+  // the stddev of the result (and of the service's response) is.
+  std::vector<double> error_in_sd;
   for (int t = 0; t < trials; ++t) {
     if (only >= 0 && t != only) continue;
     cal::ExperimentTrial trial;
@@ -500,6 +505,9 @@ int main(int argc, char** argv) {
     cpu_seconds.push_back(r.cpu_time);
     unobservable.insert(r.unobservable.begin(), r.unobservable.end());
     successes += r.success ? 1 : 0;
+    for (int d = 0; d < 6; ++d) {
+      if (std::isfinite(r.stddev[d]) && r.stddev[d] > 0) error_in_sd.push_back(std::abs(err[d]) / r.stddev[d]);
+    }
     std::vector<cal::Pose6> trace{cal::poseDifference(trial.initial_guess, trial.truth)};
     for (const cal::Pose6& p : r.trace) trace.push_back(cal::poseDifference(p, trial.truth));
     traces.push_back(trace);
@@ -519,6 +527,8 @@ int main(int argc, char** argv) {
                   r.refinement.at_solution.correspondences,
                   r.observability.curvature[0], r.observability.curvature[1], r.observability.curvature[2],
                   r.observability.curvature[3], r.observability.curvature[4], r.observability.curvature[5]);
+      std::printf("          reported stddev: x %.3g y %.3g z %.3g m, roll %.3g pitch %.3g yaw %.3g rad\n",
+                  r.stddev[0], r.stddev[1], r.stddev[2], r.stddev[3], r.stddev[4], r.stddev[5]);
       const cal::Pose6& sg = r.observability.significance;
       std::printf("          curvature significance (mean / standard error): %.3g %.3g %.3g %.3g %.3g %.3g\n",
                   sg[0], sg[1], sg[2], sg[3], sg[4], sg[5]);
@@ -554,6 +564,16 @@ int main(int argc, char** argv) {
               sec_median, sec_max, cpu_median, cpu_max, successes, static_cast<int>(seconds.size()));
   for (const std::string& u : unobservable) std::printf(" %s", u.c_str());
   std::printf("%s\n", unobservable.empty() ? " none" : "");
+  // The share of observable DOF estimates within k reported standard deviations of the truth
+  // (68 / 95 / 99.7 % for an honest Gaussian figure).
+  const auto within = [&](double k) {
+    const auto n = std::count_if(error_in_sd.begin(), error_in_sd.end(), [k](double z) { return z <= k; });
+    return error_in_sd.empty() ? 0.0 : 100.0 * static_cast<double>(n) / static_cast<double>(error_in_sd.size());
+  };
+  const double sd_median = error_in_sd.empty() ? NAN : median(error_in_sd);
+  std::printf("reported stddev: |error| within 1 / 2 / 3 sd for %.0f / %.0f / %.0f %% of %zu DOF estimates "
+              "(median |error| / sd %.2f)\n",
+              within(1), within(2), within(3), error_in_sd.size(), sd_median);
 
   if (!json_path.empty()) {
     std::ostringstream j;
@@ -569,7 +589,10 @@ int main(int argc, char** argv) {
     j << "},\n \"seconds_per_trial\": {\"median\": " << jsonNumber(sec_median)
       << ", \"max\": " << jsonNumber(sec_max) << "},\n \"cpu_seconds_per_trial\": {\"median\": "
       << jsonNumber(cpu_median) << ", \"max\": " << jsonNumber(cpu_max)
-      << "},\n \"successes\": " << successes
+      << "},\n \"stddev_coverage\": {\"within_1\": " << jsonNumber(within(1))
+      << ", \"within_2\": " << jsonNumber(within(2)) << ", \"within_3\": " << jsonNumber(within(3))
+      << ", \"median_error_over_sd\": " << jsonNumber(sd_median) << "}"
+      << ",\n \"successes\": " << successes
       << ",\n \"unobservable\": [";
     bool first = true;
     for (const std::string& u : unobservable) {

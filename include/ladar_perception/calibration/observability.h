@@ -33,6 +33,17 @@ struct ObservabilityParams {
   // (max_stddev [m], max_stddev_rotation [rad]); the relative threshold is then not used.
   double min_significance = 3.0;
   double max_stddev_rotation = 0.01;
+  // The reported standard deviations (Observability::stddev) come from the cluster-robust
+  // sandwich H^-1 M H^-1, M the covariance of the scores summed over cubes of this size [m]
+  // around the reference surface points (Linearisation::score_covariance), never below
+  // sigma^2 H^-1; 0 = sigma^2 H^-1 alone, which treats every residual as independent. The
+  // residuals on one surface patch share its modelling error (a plane fitted to noisy returns
+  // leans or sits off as a whole): on the thesis experiment sigma^2 H^-1 was a median 2.5x
+  // (Velodyne-Velodyne) and 7-8x (SICK-Velodyne) smaller than the errors; with 8 m cubes 0.9x
+  // and 1.2-2.1x (calibration_benchmark's "reported stddev" line; 2 m: 1.2x and 4x).
+  double score_cluster = 8.0;
+  // Fewer clusters than this estimate M too poorly (rank 6 needs 7): sigma^2 H^-1 alone.
+  int min_score_clusters = 12;
 };
 
 // The cost at the solution moved by a step in (x, y, z, rotation) coordinates (see refinement.h).
@@ -41,7 +52,9 @@ using CostAlong = std::function<double(const Pose6& step)>;
 using LossesAlong = std::function<void(const Pose6& step, std::vector<float>* losses)>;
 
 struct Observability {
-  Pose6 stddev = Pose6::Zero();          // sqrt(diag(sigma^2 H^+)); infinity when unobservable
+  // sqrt(max(diag(H^+ M H^+), diag(sigma^2 H^+))) with score_covariance M, else
+  // sqrt(diag(sigma^2 H^+)), over the fixed directions; infinity for an unobservable DOF.
+  Pose6 stddev = Pose6::Zero();
   std::vector<int> unobservable;         // DOF indices
   std::vector<std::string> unobservable_names;
   Pose6 eigenvalues = Pose6::Zero();     // of the scaled, per-correspondence Hessian, ascending
@@ -61,11 +74,14 @@ struct Observability {
 // the cost itself (central second difference, correspondences re-associated at each probe):
 // J^T W J alone credits the noise in the reference normals with information, so a flat plane
 // would seem to fix x and y a little; the measured curvature does not.
+// score_covariance, when given: M of the sandwich covariance H^+ M H^+ of the reported stddev
+// (Linearisation::score_covariance); each DOF's variance is the larger of that and sigma^2 H^+.
 Observability analyseObservability(const Matrix6& hessian, double residual_variance,
                                    long correspondences, double lever_arm,
                                    const ObservabilityParams& params = ObservabilityParams(),
                                    const CostAlong& cost_along = nullptr,
-                                   const LossesAlong& losses_along = nullptr);
+                                   const LossesAlong& losses_along = nullptr,
+                                   const Matrix6* score_covariance = nullptr);
 
 }  // namespace calibration
 }  // namespace ladar_perception

@@ -112,18 +112,28 @@ struct Linearisation {
   double residual_variance = 0;        // weighted mean r^2
   long correspondences = 0;
   double lever_arm = 1.0;              // RMS distance of the target points from their sensor [m]
+  // Filled when linearise is given a score cluster size: the target points' scores (each
+  // residual's w r J, the terms of the gradient) summed per cluster of their surface points (a
+  // cube of that size in the odom frame), and the covariance of those cluster sums, times the
+  // number of clusters: the "meat" of a cluster-robust sandwich covariance H^-1 M H^-1. The
+  // residuals of points on one reference surface patch share its modelling error (a plane
+  // fitted to noisy returns leans or sits off as a whole), so they are not independent, and
+  // sigma^2 H^-1 alone is over-confident (observability.h).
+  Matrix6 score_covariance = Matrix6::Zero();
+  long score_clusters = 0;
 };
 
 Linearisation linearise(const SurfaceModel& model, const ScanSet& target, const Pose6& extrinsic,
                         double max_correspondence, double huber, double noise_floor = 0.0,
                         double range_noise = 0.0, double reference_noise = 0.0,
-                        std::vector<float>* point_loss = nullptr);
+                        std::vector<float>* point_loss = nullptr, double score_cluster = 0.0);
 // The same with the weighting of `params` (noise_floor, range_noise, reference_noise, huber).
 // point_loss, when given: each target point's Huber loss, NaN without a correspondence (sized
-// once per call, not per point).
+// once per call, not per point). score_cluster > 0 [m]: also the score covariance over clusters
+// of that size (Linearisation::score_covariance).
 Linearisation linearise(const SurfaceModel& model, const ScanSet& target, const Pose6& extrinsic,
                         double max_correspondence, const RefinementParams& params,
-                        std::vector<float>* point_loss = nullptr);
+                        std::vector<float>* point_loss = nullptr, double score_cluster = 0.0);
 
 struct RefinementResult {
   Pose6 extrinsic = Pose6::Zero();

@@ -519,27 +519,23 @@ CalibrationResult calibrateAttempt(const CalibrationInput& input,
     rp.max_correspondence_start = rp.max_correspondence_end;
     at = refine(model, target, estimate, rp).extrinsic;
     to_minimum = poseDifference(at, estimate);
-    lin = linearise(model, target, at, params.refinement.max_correspondence_end, params.refinement);
-  } else if (!cancelled && final_target != &target) {
-    // The check reads the whole target (what the data can fix), not the refinement's thinned one.
-    lin = linearise(model, target, estimate, params.refinement.max_correspondence_end,
-                    params.refinement);
-  } else if (!cancelled) {
-    // lin is the refinement's linearisation at the solution.
-  } else {
-    lin = linearise(model, target, estimate, params.refinement.max_correspondence_end,
-                    params.refinement);
   }
+  // The check reads the whole target (what the data can fix), not the refinement's thinned one,
+  // with the residuals' scores summed per surface patch for the reported standard deviations.
   const double max_corr = params.refinement.max_correspondence_end;
+  lin = linearise(model, target, at, max_corr, params.refinement, nullptr,
+                  params.observability.score_cluster);
   const CostAlong cost_along = [&](const Pose6& step) {
     return linearise(model, target, applyStep(at, step), max_corr, params.refinement).cost;
   };
   const LossesAlong losses_along = [&](const Pose6& step, std::vector<float>* losses) {
     linearise(model, target, applyStep(at, step), max_corr, params.refinement, losses);
   };
-  out.observability = analyseObservability(lin.hessian, lin.residual_variance,
-                                           lin.correspondences, lin.lever_arm,
-                                           params.observability, cost_along, losses_along);
+  out.observability = analyseObservability(
+      lin.hessian, lin.residual_variance, lin.correspondences, lin.lever_arm, params.observability,
+      cost_along, losses_along,
+      lin.score_clusters >= params.observability.min_score_clusters ? &lin.score_covariance
+                                                                     : nullptr);
   out.stddev = out.observability.stddev;
   out.unobservable = out.observability.unobservable_names;
   out.extrinsic = estimate;

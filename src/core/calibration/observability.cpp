@@ -13,7 +13,8 @@ Observability analyseObservability(const Matrix6& hessian, double residual_varia
                                    long correspondences, double lever_arm,
                                    const ObservabilityParams& params,
                                    const CostAlong& cost_along,
-                                   const LossesAlong& losses_along) {
+                                   const LossesAlong& losses_along,
+                                   const Matrix6* score_covariance) {
   Observability out;
   const double inf = std::numeric_limits<double>::infinity();
   if (correspondences <= 0 || !hessian.allFinite()) {
@@ -107,9 +108,14 @@ Observability analyseObservability(const Matrix6& hessian, double residual_varia
       pinv += v * v.transpose() / std::max(out.eigenvalues[k], 1e-300);
     }
   }
-  // Back to (t, w) units; the per-correspondence normalisation comes off with 1/N.
-  const Matrix6 cov = s.asDiagonal() * pinv * s.asDiagonal() * residual_variance /
-                      static_cast<double>(correspondences);
+  // Back to (t, w) units; the per-correspondence normalisation comes off with 1/N. Over the
+  // fixed directions H^+ = S pinv S / N: the variances of sigma^2 H^+, and of the sandwich
+  // H^+ M H^+ of the cluster sums' score covariance M when given (the larger of the two).
+  const Matrix6 h_pinv = s.asDiagonal() * pinv * s.asDiagonal() / static_cast<double>(correspondences);
+  Pose6 variance = residual_variance * h_pinv.diagonal();
+  if (score_covariance && score_covariance->allFinite()) {
+    variance = variance.cwiseMax((h_pinv * (*score_covariance) * h_pinv).diagonal());
+  }
   // Each weak direction names at least its dominant DOF, even when it mixes several.
   std::array<bool, 6> weak_dof{};
   for (int i = 0; i < 6; ++i) weak_dof[i] = weak_projector(i, i) >= params.min_projection;
@@ -132,7 +138,7 @@ Observability analyseObservability(const Matrix6& hessian, double residual_varia
       out.unobservable_names.push_back(dofName(i));
       out.stddev[i] = inf;
     } else {
-      out.stddev[i] = std::sqrt(std::max(0.0, cov(i, i)));
+      out.stddev[i] = std::sqrt(std::max(0.0, variance[i]));
     }
   }
   return out;

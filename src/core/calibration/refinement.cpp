@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <limits>
+#include <unordered_map>
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
@@ -65,7 +66,7 @@ void SurfaceModel::build(const PointVector& points, const RefinementParams& para
 Linearisation linearise(const SurfaceModel& model, const ScanSet& target, const Pose6& extrinsic,
                         double max_correspondence, double huber, double noise_floor,
                         double range_noise, double reference_noise,
-                        std::vector<float>* point_loss) {
+                        std::vector<float>* point_loss, double score_cluster) {
   Linearisation lin;
   if (point_loss) point_loss->assign(target.numPoints(), std::numeric_limits<float>::quiet_NaN());
   if (model.empty()) return lin;
@@ -80,6 +81,11 @@ Linearisation linearise(const SurfaceModel& model, const ScanSet& target, const 
   Pose6 g = Pose6::Zero();
   double loss = 0, wr2 = 0, wsum = 0, lever2 = 0;
   long n = 0;
+  // Score sums per cluster (score_cluster > 0), keyed by the surface point's cube.
+  const bool clustered = score_cluster > 0;
+  const double inv_cluster = clustered ? 1.0 / score_cluster : 0.0;
+  std::unordered_map<int64_t, int> cluster_of;
+  std::vector<Pose6> cluster_scores;
   for (std::size_t k = 0; k < target.numScans(); ++k) {
     const Eigen::Isometry3d t_os = target.vehicle_poses[k] * t_bs;
     const Eigen::Matrix3f r_os = t_os.linear().cast<float>();
@@ -119,6 +125,7 @@ Linearisation linearise(const SurfaceModel& model, const ScanSet& target, const 
       const double li = ar <= huber ? 0.5 * r * r : huber * (ar - 0.5 * huber);
       loss += li;
       if (point_loss) (*point_loss)[i] = static_cast<float>(li);
+      Pose6 score = Pose6::Zero();  // this point's w r J (when clustered)
       if (edge) {
         for (int a = 0; a < 3; ++a) {
           const Eigen::Vector3d m = scale * r_ob.row(a).transpose();  // odom axis a, base_link
@@ -127,6 +134,7 @@ Linearisation linearise(const SurfaceModel& model, const ScanSet& target, const 
           jac.tail<3>() = lever.cross(m);
           h.noalias() += w * jac * jac.transpose();
           g.noalias() += w * e[a] * jac;
+          if (clustered) score.noalias() += w * e[a] * jac;
         }
       } else {
         const Eigen::Vector3d m = scale * (r_ob.transpose() * nrm);  // normal in base_link axes
@@ -135,6 +143,17 @@ Linearisation linearise(const SurfaceModel& model, const ScanSet& target, const 
         jac.tail<3>() = lever.cross(m);
         h.noalias() += w * jac * jac.transpose();
         g.noalias() += w * r * jac;
+        if (clustered) score.noalias() = w * r * jac;
+      }
+      if (clustered) {
+        // The cube's coordinates, 21 bits each (+-2^20 cubes, clamped beyond).
+        const Eigen::Array3d c = (model.points()[j].cast<double>() * inv_cluster)
+                                     .array().floor().max(-1048575.0).min(1048575.0) + 1048576.0;
+        const int64_t key = (static_cast<int64_t>(c.x()) << 42) |
+                            (static_cast<int64_t>(c.y()) << 21) | static_cast<int64_t>(c.z());
+        const auto it = cluster_of.emplace(key, static_cast<int>(cluster_scores.size())).first;
+        if (it->second == static_cast<int>(cluster_scores.size())) cluster_scores.push_back(Pose6::Zero());
+        cluster_scores[it->second] += score;
       }
       wr2 += w * r * r;
       wsum += w;
@@ -144,6 +163,16 @@ Linearisation linearise(const SurfaceModel& model, const ScanSet& target, const 
   }
   lin.hessian = h;
   lin.gradient = g;
+  if (clustered && cluster_scores.size() > 1) {
+    // The covariance of the cluster sums about their mean, times their number (with the small
+    // sample correction): sum_c (s_c - s) (s_c - s)^T * C / (C - 1).
+    const double count = static_cast<double>(cluster_scores.size());
+    const Pose6 mean = g / count;
+    Matrix6 m = Matrix6::Zero();
+    for (const Pose6& sc : cluster_scores) m.noalias() += (sc - mean) * (sc - mean).transpose();
+    lin.score_covariance = m * (count / (count - 1.0));
+    lin.score_clusters = static_cast<long>(cluster_scores.size());
+  }
   lin.correspondences = n;
   lin.cost = n > 0 ? loss / n : std::numeric_limits<double>::infinity();
   lin.residual_variance = wsum > 0 ? wr2 / wsum : 0;
@@ -153,9 +182,9 @@ Linearisation linearise(const SurfaceModel& model, const ScanSet& target, const 
 
 Linearisation linearise(const SurfaceModel& model, const ScanSet& target, const Pose6& extrinsic,
                         double max_correspondence, const RefinementParams& params,
-                        std::vector<float>* point_loss) {
+                        std::vector<float>* point_loss, double score_cluster) {
   return linearise(model, target, extrinsic, max_correspondence, params.huber, params.noise_floor,
-                   params.range_noise, params.reference_noise, point_loss);
+                   params.range_noise, params.reference_noise, point_loss, score_cluster);
 }
 
 double robustCostOverAll(const Linearisation& lin, std::size_t target_points,
