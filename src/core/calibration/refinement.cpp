@@ -151,9 +151,9 @@ Linearisation linearise(const SurfaceModel& model, const ScanSet& target, const 
                                      .array().floor().max(-1048575.0).min(1048575.0) + 1048576.0;
         const int64_t key = (static_cast<int64_t>(c.x()) << 42) |
                             (static_cast<int64_t>(c.y()) << 21) | static_cast<int64_t>(c.z());
-        const auto it = cluster_of.emplace(key, static_cast<int>(cluster_scores.size())).first;
-        if (it->second == static_cast<int>(cluster_scores.size())) cluster_scores.push_back(Pose6::Zero());
-        cluster_scores[it->second] += score;
+        const auto added = cluster_of.emplace(key, static_cast<int>(cluster_scores.size()));
+        if (added.second) cluster_scores.push_back(Pose6::Zero());  // a new cube
+        cluster_scores[added.first->second] += score;
       }
       wr2 += w * r * r;
       wsum += w;
