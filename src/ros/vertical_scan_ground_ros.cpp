@@ -30,6 +30,7 @@ VerticalScanParams toVerticalScanParams(const VerticalScanGroundConfig& c) {
   p.track_min_local_slope = static_cast<float>(c.track_min_local_slope);
   p.track_anchor_distance = static_cast<float>(c.track_anchor_distance);
   p.track_max_bend = static_cast<float>(c.track_max_bend);
+  p.track_first_slope_max = static_cast<float>(c.track_first_slope_max);
   p.track_recover_distance = static_cast<float>(c.track_recover_distance);
   p.negative_gnd_error_max = static_cast<float>(c.negative_gnd_error_max);
   p.negative_support_distance = static_cast<float>(c.negative_support_distance);
@@ -68,6 +69,7 @@ void loadMethodSettings(const std::string& method, VerticalScanGroundConfig* c) 
   c->track_min_local_slope = p.track_min_local_slope;
   c->track_anchor_distance = p.track_anchor_distance;
   c->track_max_bend = p.track_max_bend;
+  c->track_first_slope_max = p.track_first_slope_max;
   c->track_recover_distance = p.track_recover_distance;
   c->negative_gnd_error_max = p.negative_gnd_error_max;
   c->negative_support_distance = p.negative_support_distance;

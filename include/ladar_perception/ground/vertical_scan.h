@@ -49,6 +49,12 @@ struct VerticalScanParams {
   float track_max_local_slope = 1.0f;     // steepest rise from the last ground return
   float track_min_local_slope = -0.4f;    // steepest fall from the last ground return
   float track_anchor_distance = 3.0f;     // the extrapolation slope spans at least this [m]
+  // Before a column's first ground return its line runs from the ground point under the sensor
+  // with the column's straight estimate, but rises no more steeply than this: the
+  // vehicle stands on the ground, so the terrain a few metres away lies near its plane. A
+  // column that a parked car beside the vehicle fills from the lowest laser up otherwise
+  // takes the car's side and hood for a 0.3 slope. <= 0: off [-].
+  float track_first_slope_max = 0.05f;
   float track_max_bend = 0.2f;            // extrapolation slope within +- this of the column's
                                           // straight estimate (eqs 3.4-3.9)
   float track_recover_distance = 0.8f;    // consistent returns below the line over this many

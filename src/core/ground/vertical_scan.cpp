@@ -189,6 +189,12 @@ VerticalScanParams verticalScanDefaultParams() {
   p.track_max_step = 0.12f;
   p.track_tolerance_per_m = 0.05f;
   p.track_recover_distance = 0.8f;
+  // Before its first ground return a column's line rises at most 5 % (the straight
+  // estimate alone let a parked car beside the vehicle, filling the column from the lowest
+  // laser up, pass for a 0.3 slope: its side and hood became ground). 10 scans, seed 1: urban
+  // 97.45 / 99.19 / 96.60 -> 97.59 / 99.21 / 96.78 %, rural obstacle recall 96.61 -> 97.34 %,
+  // hillside and potholes unchanged; 0.01-0.07 measure the same within 0.05 points.
+  p.track_first_slope_max = 0.05f;
   // Knots every 0.75 m (1 m before): a step the line climbs (a curb, the bottom edge of a car)
   // is interpolated over one segment, and with 1 m segments the road up to a metre in front of
   // it lay several cm below the line and became a negative obstacle (urban ground recall 98.6
@@ -319,7 +325,9 @@ int trackGroundLine(const float* r, const float* height, int n, const VerticalSc
   gr[m] = 0.f;
   gh[m] = 0.f;
   ++m;
+  // Until the first ground return: the straight estimate, rising at most track_first_slope_max.
   float slope = slope0;
+  if (p.track_first_slope_max > 0.f) slope = std::min(slope, p.track_first_slope_max);
   int anchor = 0;
   bool last_steep = false;  // the newest ground return was a step (steeper than ground_slope_max)
   // Returns below the extrapolation that agree with each other: where the ground reappears
@@ -1389,6 +1397,7 @@ bool setVerticalScanParam(VerticalScanParams* p, const std::string& key, double 
       {"track_min_local_slope", &p->track_min_local_slope},
       {"track_anchor_distance", &p->track_anchor_distance},
       {"track_max_bend", &p->track_max_bend},
+      {"track_first_slope_max", &p->track_first_slope_max},
       {"track_recover_distance", &p->track_recover_distance},
       {"negative_gnd_error_max", &p->negative_gnd_error_max},
       {"vertical_gnd_error_max", &p->vertical_gnd_error_max},
