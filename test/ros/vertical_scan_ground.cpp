@@ -361,7 +361,7 @@ double reconfigure(const std::string& node, const std::string& name, double valu
 TEST_F(VerticalScanGroundTest, DynamicReconfigureTakesEffectOnTheNextScan) {
   ros::NodeHandle nh;
   const std::string node = "/dyn/vertical_scan_ground";
-  ros::param::set(node + "/gnd_error_max_base", 0.27);  // explicit at start-up (the default is 0.25)
+  ros::param::set(node + "/gnd_error_max_base", 0.27);  // explicit at start-up (the default is 0.22)
   nodelet::Loader manager(false);
   nodelet::M_string remap;
   remap["points"] = "/dyn/points";

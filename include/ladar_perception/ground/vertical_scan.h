@@ -78,7 +78,7 @@ struct VerticalScanParams {
   // representatives of the laser rows just below and above it in its column (the smaller of
   // the two), combined with GndError as in eq 3.15. P = max(P_3.15, P_vertical).
   bool vertical_surfaces = true;
-  float vertical_gnd_error_max = 0.04f;   // GndError at which P_vertical's first factor is 1 [m]
+  float vertical_gnd_error_max = 0.03f;   // GndError at which P_vertical's first factor is 1 [m]
   float vertical_slope_max = 0.3f;        // local slope at which its second factor is 1
   // The foot of a vertical face (a curb's lower half, the bottom of a car's side): the line's
   // segment across a step smears it, so these returns lie below or barely above the line.
