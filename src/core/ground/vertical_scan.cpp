@@ -954,15 +954,16 @@ void VerticalScanGround::fitColumns() {
       float* vr = col_w_.data() + 2 * (rows + 1);
       float* vh = vr + (rows + 1);
       int mv = 0;
+      bool steep_before = false;  // the step from q - 1 to q (each step is tested once)
       for (int q = 0; q < m; ++q) {
-        const bool steep_before =
-            q > 0 && std::fabs(ch[q] - ch[q - 1]) > p.track_max_step + p.ground_slope_max * (cr[q] - cr[q - 1]);
         const bool steep_after =
             q + 1 < m && std::fabs(ch[q + 1] - ch[q]) > p.track_max_step + p.ground_slope_max * (cr[q + 1] - cr[q]);
-        if (steep_before || steep_after) continue;
-        vr[mv] = cr[q];
-        vh[mv] = ch[q];
-        ++mv;
+        if (!steep_before && !steep_after) {
+          vr[mv] = cr[q];
+          vh[mv] = ch[q];
+          ++mv;
+        }
+        steep_before = steep_after;
       }
       column_slope_[c] = vertical_scan::estimateSlope(vr, vh, mv, p, 0.f, col_w_.data(), &support);
     } else {
