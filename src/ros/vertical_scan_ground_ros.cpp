@@ -37,6 +37,11 @@ VerticalScanParams toVerticalScanParams(const VerticalScanGroundConfig& c) {
   p.vertical_gnd_error_max = static_cast<float>(c.vertical_gnd_error_max);
   p.vertical_slope_max = static_cast<float>(c.vertical_slope_max);
   p.vertical_foot_slope = static_cast<float>(c.vertical_foot_slope);
+  p.laser_neighbours = c.laser_neighbours;
+  p.neighbour_cells_per_column = c.neighbour_cells_per_column;
+  p.neighbour_max_dr = static_cast<float>(c.neighbour_max_dr);
+  p.neighbour_spacing_fraction = static_cast<float>(c.neighbour_spacing_fraction);
+  p.neighbour_min_step = static_cast<float>(c.neighbour_min_step);
   p.bend_ground_line = c.bend_ground_line;
   p.couple_columns = c.couple_columns;
   p.negative_obstacles = c.negative_obstacles;
@@ -76,6 +81,11 @@ void loadMethodSettings(const std::string& method, VerticalScanGroundConfig* c) 
   c->vertical_gnd_error_max = p.vertical_gnd_error_max;
   c->vertical_slope_max = p.vertical_slope_max;
   c->vertical_foot_slope = p.vertical_foot_slope;
+  c->laser_neighbours = p.laser_neighbours;
+  c->neighbour_cells_per_column = p.neighbour_cells_per_column;
+  c->neighbour_max_dr = p.neighbour_max_dr;
+  c->neighbour_spacing_fraction = p.neighbour_spacing_fraction;
+  c->neighbour_min_step = p.neighbour_min_step;
   c->bend_ground_line = p.bend_ground_line;
   c->couple_columns = p.couple_columns;
   c->negative_obstacles = p.negative_obstacles;

@@ -6,9 +6,10 @@
 // Instruction count of one call (callgrind):
 //   valgrind --tool=callgrind --instr-atstart=no ground_vertical_scan_bench --callgrind-once FILE.bin
 // loads the file, warms nothing, and instruments exactly one classify call (--thesis: the thesis
-// mode; --warm: after one uninstrumented call, as in a running stream).
+// mode; --neighbours: the default with laser_neighbours; --warm: after one uninstrumented call,
+// as in a running stream).
 // Output of one call for comparisons between builds:
-//   ground_vertical_scan_bench --dump FILE.bin OUT [--thesis]   (n label bytes, n floats)
+//   ground_vertical_scan_bench --dump FILE.bin OUT [--thesis|--neighbours]   (n label bytes, n floats)
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -26,6 +27,25 @@
 using namespace ladar_perception;
 
 namespace {
+
+enum class Mode { kDefault, kThesis, kNeighbours };
+
+VerticalScanParams paramsOf(Mode mode) {
+  switch (mode) {
+    case Mode::kThesis: return verticalScanThesisParams();
+    case Mode::kNeighbours: return verticalScanNeighboursParams();
+    default: return verticalScanDefaultParams();
+  }
+}
+
+Mode modeOf(int argc, char** argv, int from) {
+  Mode mode = Mode::kDefault;
+  for (int a = from; a < argc; ++a) {
+    if (std::strcmp(argv[a], "--thesis") == 0) mode = Mode::kThesis;
+    if (std::strcmp(argv[a], "--neighbours") == 0) mode = Mode::kNeighbours;
+  }
+  return mode;
+}
 
 std::string kittiDir() {
   const char* env = std::getenv("LADAR_KITTI_DIR");
@@ -53,7 +73,7 @@ void runClassify(benchmark::State& state, const PackedCloud& cloud, const Sensor
       static_cast<double>(out.count(kLabelObstacle)) / std::max<std::size_t>(1, view.size());
 }
 
-void BM_Kitti(benchmark::State& state, const std::string& file, bool thesis) {
+void BM_Kitti(benchmark::State& state, const std::string& file, Mode mode) {
   PackedCloud cloud;
   std::string error;
   if (!readKittiBin(kittiDir() + "/" + file, &cloud, &error)) {
@@ -62,11 +82,10 @@ void BM_Kitti(benchmark::State& state, const std::string& file, bool thesis) {
     }
     return;
   }
-  runClassify(state, cloud, SensorPose::fromHeight(1.73f),
-              thesis ? verticalScanThesisParams() : verticalScanDefaultParams());
+  runClassify(state, cloud, SensorPose::fromHeight(1.73f), paramsOf(mode));
 }
 
-void BM_SimulatedUrban(benchmark::State& state, bool thesis) {
+void BM_SimulatedUrban(benchmark::State& state, Mode mode) {
   static sim::SimulatedScan scan;
   static bool made = false;
   if (!made) {
@@ -83,11 +102,10 @@ void BM_SimulatedUrban(benchmark::State& state, bool thesis) {
                                     &scan);
     made = true;
   }
-  runClassify(state, scan.cloud, SensorPose::fromHeight(1.73f),
-              thesis ? verticalScanThesisParams() : verticalScanDefaultParams());
+  runClassify(state, scan.cloud, SensorPose::fromHeight(1.73f), paramsOf(mode));
 }
 
-int callgrindOnce(const std::string& path, bool thesis, bool warm) {
+int callgrindOnce(const std::string& path, Mode mode, bool warm) {
   PackedCloud cloud;
   std::string error;
   PointCloudView view;
@@ -95,7 +113,7 @@ int callgrindOnce(const std::string& path, bool thesis, bool warm) {
     std::cerr << error << "\n";
     return 1;
   }
-  VerticalScanGround model(thesis ? verticalScanThesisParams() : verticalScanDefaultParams());
+  VerticalScanGround model(paramsOf(mode));
   GroundClassification out;
   // --warm: the workspace of a steady-state call (allocated and touched once before), e.g. for
   // --cache-sim=yes.
@@ -109,7 +127,7 @@ int callgrindOnce(const std::string& path, bool thesis, bool warm) {
 
 // Writes the labels and P(obstacle) of one classify call (n label bytes, then n floats): a
 // byte-for-byte comparison of two builds, e.g. before and after a speed change.
-int dumpOnce(const std::string& path, const std::string& out_path, bool thesis) {
+int dumpOnce(const std::string& path, const std::string& out_path, Mode mode) {
   PackedCloud cloud;
   std::string error;
   PointCloudView view;
@@ -117,7 +135,7 @@ int dumpOnce(const std::string& path, const std::string& out_path, bool thesis) 
     std::cerr << error << "\n";
     return 1;
   }
-  VerticalScanGround model(thesis ? verticalScanThesisParams() : verticalScanDefaultParams());
+  VerticalScanGround model(paramsOf(mode));
   GroundClassification out;
   model.classify(view, SensorPose::fromHeight(1.73f), &out);
   std::FILE* f = std::fopen(out_path.c_str(), "wb");
@@ -135,29 +153,30 @@ int dumpOnce(const std::string& path, const std::string& out_path, bool thesis) 
 
 int main(int argc, char** argv) {
   if (argc >= 3 && std::strcmp(argv[1], "--callgrind-once") == 0) {
-    bool thesis = false, warm = false;
-    for (int a = 3; a < argc; ++a) {
-      thesis = thesis || std::strcmp(argv[a], "--thesis") == 0;
-      warm = warm || std::strcmp(argv[a], "--warm") == 0;
-    }
-    return callgrindOnce(argv[2], thesis, warm);
+    bool warm = false;
+    for (int a = 3; a < argc; ++a) warm = warm || std::strcmp(argv[a], "--warm") == 0;
+    return callgrindOnce(argv[2], modeOf(argc, argv, 3), warm);
   }
-  if (argc >= 4 && std::strcmp(argv[1], "--dump") == 0) {
-    return dumpOnce(argv[2], argv[3], argc >= 5 && std::strcmp(argv[4], "--thesis") == 0);
-  }
+  if (argc >= 4 && std::strcmp(argv[1], "--dump") == 0) return dumpOnce(argv[2], argv[3], modeOf(argc, argv, 4));
   for (const char* f : {"000000.bin", "000001.bin"}) {
     benchmark::RegisterBenchmark((std::string("VerticalScan/kitti/") + f).c_str(),
-                                 [f](benchmark::State& s) { BM_Kitti(s, f, false); })
+                                 [f](benchmark::State& s) { BM_Kitti(s, f, Mode::kDefault); })
         ->Unit(benchmark::kMillisecond);
   }
   benchmark::RegisterBenchmark("VerticalScanThesis/kitti/000000.bin",
-                               [](benchmark::State& s) { BM_Kitti(s, "000000.bin", true); })
+                               [](benchmark::State& s) { BM_Kitti(s, "000000.bin", Mode::kThesis); })
+      ->Unit(benchmark::kMillisecond);
+  benchmark::RegisterBenchmark("VerticalScanNeighbours/kitti/000000.bin",
+                               [](benchmark::State& s) { BM_Kitti(s, "000000.bin", Mode::kNeighbours); })
       ->Unit(benchmark::kMillisecond);
   benchmark::RegisterBenchmark("VerticalScan/simulated_urban",
-                               [](benchmark::State& s) { BM_SimulatedUrban(s, false); })
+                               [](benchmark::State& s) { BM_SimulatedUrban(s, Mode::kDefault); })
       ->Unit(benchmark::kMillisecond);
   benchmark::RegisterBenchmark("VerticalScanThesis/simulated_urban",
-                               [](benchmark::State& s) { BM_SimulatedUrban(s, true); })
+                               [](benchmark::State& s) { BM_SimulatedUrban(s, Mode::kThesis); })
+      ->Unit(benchmark::kMillisecond);
+  benchmark::RegisterBenchmark("VerticalScanNeighbours/simulated_urban",
+                               [](benchmark::State& s) { BM_SimulatedUrban(s, Mode::kNeighbours); })
       ->Unit(benchmark::kMillisecond);
   benchmark::Initialize(&argc, argv);
   benchmark::RunSpecifiedBenchmarks();

@@ -151,3 +151,69 @@ int main(int argc, char** argv) {
   testing::InitGoogleTest(&argc, argv);
   return RUN_ALL_TESTS();
 }
+
+TEST(GroundAccuracy, LaserNeighboursMeetTheUrbanTargets) {
+  // laser_neighbours (the "neighbours" settings): the returns of the rows above and below at
+  // the same azimuth put the feet and tops of curb faces, car sides and walls, and the rims of
+  // holes, on the obstacle side; negative obstacles are measured from the foot of a step. On
+  // these 3 scans: urban 99.26 / 99.19 / 98.95 %, hillside 99.98 / 99.70 / 98.62 %, rural
+  // 99.91 / 99.29 / 99.36 % (the default: urban 97.90 / 99.05 / 96.96 %).
+  for (const char* w : {"urban", "hillside", "rural"}) {
+    const GroundAccuracy acc = evaluate(w, verticalScanNeighboursParams());
+    EXPECT_GE(acc.groundPrecision(), 0.99) << w;
+    EXPECT_GE(acc.groundRecall(), 0.99) << w;
+    EXPECT_GE(acc.obstacleRecall(), 0.97) << w;
+  }
+  const GroundAccuracy holes = evaluate("potholes", verticalScanNeighboursParams());
+  const GroundAccuracy holes_default = evaluate("potholes", verticalScanDefaultParams());
+  EXPECT_GE(holes.groundRecall(), 0.99);
+  EXPECT_GT(holes.obstacleRecall(), holes_default.obstacleRecall() + 0.08);  // 65.0 % vs 55.6 %
+}
+
+TEST(GroundAccuracy, LaserNeighboursDoNotDependOnTheInputOrder) {
+  // The neighbours come from a range image by row and sub-column, not from the order of the
+  // returns: a scan in the simulator's firing order and the same returns shuffled get the same
+  // label per return.
+  sim::World world;
+  std::string error;
+  ASSERT_TRUE(sim::makeStandardWorld("urban", 1, &world, &error)) << error;
+  sim::SimulatedScan scan;
+  sim::simulateVelodyneRevolution(world, world.drivePose(0.4 * world.driveDuration()) * evaluationSensorMount(),
+                                  sim::VelodyneModel::hdl64e(sim::NoiseProfile::kDatasheet), 11, &scan);
+  const std::size_t n = scan.cloud.size();
+  ASSERT_GT(n, 50000u);
+  std::vector<std::size_t> order(n);
+  for (std::size_t i = 0; i < n; ++i) order[i] = i;
+  uint32_t state = 2024u;
+  for (std::size_t i = n - 1; i > 0; --i) {  // Fisher-Yates with a fixed LCG
+    state = state * 1664525u + 1013904223u;
+    std::swap(order[i], order[state % (i + 1)]);
+  }
+  PackedCloud shuffled = scan.cloud;
+  const std::size_t step = scan.cloud.layout.point_step;
+  for (std::size_t i = 0; i < n; ++i) {
+    std::memcpy(&shuffled.data[i * step], &scan.cloud.data[order[i] * step], step);
+  }
+  PointCloudView a, b;
+  ASSERT_TRUE(scan.cloud.view(&a, &error)) << error;
+  ASSERT_TRUE(shuffled.view(&b, &error)) << error;
+  SensorPose pose;
+  pose.sensor_to_ground = evaluationSensorMount().cast<float>();
+  VerticalScanGround model(verticalScanNeighboursParams());
+  GroundClassification in_order, in_shuffle;
+  model.classify(a, pose, &in_order);
+  model.classify(b, pose, &in_shuffle);
+  std::size_t differ = 0, flipped = 0;
+  VerticalScanGround plain(verticalScanDefaultParams());
+  GroundClassification without;
+  plain.classify(a, pose, &without);
+  for (std::size_t i = 0; i < n; ++i) {
+    differ += in_shuffle.labels[i] != in_order.labels[order[i]];
+    flipped += in_order.labels[i] != without.labels[i];
+  }
+  std::printf("%zu returns, %zu relabelled by the neighbours, %zu differ when shuffled\n", n, flipped, differ);
+  EXPECT_GT(flipped, 200u);  // the neighbours changed something in this scan
+  // Of returns that share a range-image cell the last one in input order is the neighbour, so
+  // a few labels could differ in principle; none do in this scan.
+  EXPECT_LE(differ, n / 1000) << differ << " of " << n;
+}

@@ -87,11 +87,34 @@ struct VerticalScanParams {
   // knots before r (the ground in front of the step) and the rise is dHeight / |dr| to the
   // representative of the laser row above. P = max(P_3.15, P_vertical, P_foot). 0 = off.
   float vertical_foot_slope = 1.0f;
+  // Laser-neighbour context (beyond the thesis; off by default: it costs about half as much
+  // time again per scan, see README). Each return's neighbours are the returns of the laser
+  // rows just below and above it in the same sub-column (neighbour_cells_per_column per column,
+  // about 0.19 degrees for 1.5 degree columns), found through a range image, whatever the order
+  // of the input. First, a return that eq 3.15 called a negative obstacle is scored again with
+  // its depth below the foot of a step: the lower of the line and the line's previous segment
+  // extended (where a segment climbs a curb within it, the road in front of the curb lies below
+  // the segment). Then a return labelled ground becomes an obstacle when
+  //  - it is on a vertical face: the neighbour above (or below) is an obstacle, higher (lower)
+  //    by at least neighbour_min_step, and within neighbour_max_dr of it in r, but no more than
+  //    neighbour_spacing_fraction of the spacing of the two rows on flat ground at that range
+  //    (so the road just in front of a face is not taken for its foot);
+  //  - it is the top of a hole's far wall: the neighbour below lies more than
+  //    negative_gnd_error_max below the line, lower than this return, within
+  //    2 * neighbour_max_dr of it in r.
+  // Its P(obstacle) is then the neighbour's.
+  bool laser_neighbours = false;
+  int neighbour_cells_per_column = 8;
+  float neighbour_max_dr = 0.05f;            // [m]
+  float neighbour_spacing_fraction = 0.3f;   // [-]
+  float neighbour_min_step = 0.01f;          // [m]
 };
 
-// Settings by name: "thesis" (the thesis's method and settings) and "default" (beyond it).
+// Settings by name: "thesis" (the thesis's method and settings), "default" (beyond it), and
+// "neighbours" (the default with laser_neighbours on).
 VerticalScanParams verticalScanThesisParams();
 VerticalScanParams verticalScanDefaultParams();
+VerticalScanParams verticalScanNeighboursParams();
 
 // Sets one scalar parameter by its field name ("weight_bias", "tolerances.gnd_error_max_base",
 // "bend_ground_line" (0/1), ...): the tools' --set key=value. False with a reason for an unknown
@@ -240,10 +263,11 @@ class VerticalScanGround : public GroundModel {
  private:
   // Column (0..columns_-1) of a ground-frame direction, through the atan LUT.
   float columnCoordinate(float x, float y) const;
-  template <bool kRing, bool kTilted, bool kFastXYZ>
+  template <bool kRing, bool kTilted, bool kFastXYZ, bool kSubColumns>
   void binPoints(const PointCloudView& view, const SensorPose& pose, GroundClassification* out);
   void fitColumns();
   void labelPoints(GroundClassification* out);
+  void labelFromLaserNeighbours(float sensor_height, GroundClassification* out);
 
   VerticalScanParams params_;
   std::string name_;
@@ -286,6 +310,15 @@ class VerticalScanGround : public GroundModel {
   std::vector<float> column_slope_;            // straight estimate per column
   std::vector<int> column_support_;
   std::vector<int> column_count_;
+  // laser_neighbours: each return's column coordinate (binPoints), its range-image cell, the
+  // range image (the last return written to each cell; a cell's entry is valid when that
+  // return's own cell is the cell, so the image is never cleared), the tangent of the angle
+  // to the next row up per row, and the returns to relabel.
+  ScratchBuffer<float> column_coordinate_;
+  ScratchBuffer<uint32_t> cell_;
+  std::vector<uint32_t> range_image_;
+  std::vector<float> row_gap_tan_;
+  std::vector<std::pair<uint32_t, float>> neighbour_obstacles_;
 };
 
 }  // namespace ladar_perception

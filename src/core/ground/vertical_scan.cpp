@@ -220,6 +220,12 @@ VerticalScanParams verticalScanDefaultParams() {
   return p;
 }
 
+VerticalScanParams verticalScanNeighboursParams() {
+  VerticalScanParams p = verticalScanDefaultParams();
+  p.laser_neighbours = true;
+  return p;
+}
+
 // --------------------------------------------------------------------------------------------
 // Row assignment from elevation.
 
@@ -514,6 +520,23 @@ void VerticalScanGround::setParams(const VerticalScanParams& params) {
   coupled_.assign(knot_height_.size(), 0.f);
   column_slope_.assign(columns_, 0.f);
   column_support_.assign(columns_, 0);
+  if (p.neighbour_cells_per_column < 1) p.neighbour_cells_per_column = 1;
+  if (p.neighbour_cells_per_column > 64) p.neighbour_cells_per_column = 64;
+  if (p.laser_neighbours) {
+    // Sized for the largest bin grid (kMaxRingRows rows); filled once, never cleared.
+    range_image_.assign(static_cast<std::size_t>(columns_) * p.neighbour_cells_per_column * kMaxRingRows,
+                        0xFFFFFFFFu);
+    // The angle from each row to the next one up, from the laser table (0.4 degrees beyond it).
+    std::vector<float> el = p.laser_elevations_deg.empty() ? hdl64eElevationsDeg() : p.laser_elevations_deg;
+    std::sort(el.begin(), el.end());
+    row_gap_tan_.assign(kMaxRingRows, std::tan(0.4f * kPi / 180.f));
+    for (std::size_t k = 0; k + 1 < el.size() && k < row_gap_tan_.size(); ++k) {
+      row_gap_tan_[k] = std::tan(std::max(el[k + 1] - el[k], 0.05f) * kPi / 180.f);
+    }
+  } else {
+    range_image_.clear();
+    range_image_.shrink_to_fit();
+  }
 }
 
 inline float VerticalScanGround::columnCoordinate(float x, float y) const {
@@ -540,7 +563,7 @@ float VerticalScanGround::groundHeight(int col, float r) const {
   return line.heightAt(r);
 }
 
-template <bool kRing, bool kTilted, bool kFastXYZ>
+template <bool kRing, bool kTilted, bool kFastXYZ, bool kSubColumns>
 void VerticalScanGround::binPoints(const PointCloudView& view, const SensorPose& pose,
                                    GroundClassification* out) {
   const std::size_t n = view.size();
@@ -560,6 +583,7 @@ void VerticalScanGround::binPoints(const PointCloudView& view, const SensorPose&
   uint32_t* __restrict bins = bin_.data();
   float* __restrict rr = r_.data();
   float* __restrict hh = height_.data();
+  float* __restrict cc = kSubColumns ? column_coordinate_.data() : nullptr;  // laser_neighbours
   uint8_t* __restrict labels = out->labels.data();
   float* __restrict prob = out->p_obstacle.data();
   uint32_t x_off = 0, y_off = 0, z_off = 0;
@@ -665,6 +689,7 @@ void VerticalScanGround::binPoints(const PointCloudView& view, const SensorPose&
                              row_lut[row_i[3]]);
       }
       __m128i bin = _mm_add_epi32(_mm_sll_epi32(_mm_cvttps_epi32(a), v_shift), row);
+      if (kSubColumns) _mm_storeu_ps(cc + i, a);
       _mm_storeu_ps(rr + i, _mm_and_ps(rc, valid));
       _mm_storeu_ps(hh + i, _mm_and_ps(_mm_add_ps(Z, v_tz), valid));
       if (valid_bits != 0xF) {
@@ -733,6 +758,7 @@ void VerticalScanGround::binPoints(const PointCloudView& view, const SensorPose&
     a = a < max_c ? a : max_c;
     const uint32_t bin = (static_cast<uint32_t>(a) << shift) + row;
     bins[i] = bin;
+    if (kSubColumns) cc[i] = a;
     rr[i] = r > kMinR ? r : kMinR;
     hh[i] = gz;
   }
@@ -769,19 +795,24 @@ void VerticalScanGround::classify(const PointCloudView& view, const SensorPose& 
   const bool tilted = !R.isIdentity(1e-6f) || t.x() != 0.f || t.y() != 0.f;
   const bool fast = view.packedFloatXYZ() &&
                     (view.height() <= 1 || view.layout().row_step == view.width() * view.layout().point_step);
-  if (ring && fast) {
-    if (tilted) binPoints<true, true, true>(view, pose, out);
-    else binPoints<true, false, true>(view, pose, out);
-  } else if (ring) {
-    if (tilted) binPoints<true, true, false>(view, pose, out);
-    else binPoints<true, false, false>(view, pose, out);
-  } else if (fast) {
-    if (tilted) binPoints<false, true, true>(view, pose, out);
-    else binPoints<false, false, true>(view, pose, out);
-  } else {
-    if (tilted) binPoints<false, true, false>(view, pose, out);
-    else binPoints<false, false, false>(view, pose, out);
-  }
+  const bool sub = params_.laser_neighbours;
+  if (sub) column_coordinate_.resize(n);
+  // binPoints<ring, tilted, fast, sub> for the run-time flags.
+  auto bin_with = [&](auto ring_c, auto tilted_c, auto fast_c) {
+    if (sub) {
+      binPoints<decltype(ring_c)::value, decltype(tilted_c)::value, decltype(fast_c)::value, true>(view, pose, out);
+    } else {
+      binPoints<decltype(ring_c)::value, decltype(tilted_c)::value, decltype(fast_c)::value, false>(view, pose, out);
+    }
+  };
+  auto bin_tilted = [&](auto ring_c, auto fast_c) {
+    if (tilted) bin_with(ring_c, std::true_type{}, fast_c);
+    else bin_with(ring_c, std::false_type{}, fast_c);
+  };
+  if (ring && fast) bin_tilted(std::true_type{}, std::true_type{});
+  else if (ring) bin_tilted(std::true_type{}, std::false_type{});
+  else if (fast) bin_tilted(std::false_type{}, std::true_type{});
+  else bin_tilted(std::false_type{}, std::false_type{});
 
   // Counting sort of the valid points by bin (3.3 step 1), by runs: consecutive points mostly
   // share a bin (a laser's sweep crosses a column in several returns), so the points are
@@ -891,6 +922,7 @@ void VerticalScanGround::classify(const PointCloudView& view, const SensorPose& 
   }
   fitColumns();
   labelPoints(out);
+  if (sub) labelFromLaserNeighbours(pose.sensor_to_ground.translation().z(), out);
 }
 
 void VerticalScanGround::fitColumns() {
@@ -1380,6 +1412,127 @@ void VerticalScanGround::labelPoints(GroundClassification* out) {
   }
 }
 
+void VerticalScanGround::labelFromLaserNeighbours(float sensor_height, GroundClassification* out) {
+  const VerticalScanParams& p = params_;
+  const ObstacleToleranceParams& tol = p.tolerances;
+  const std::size_t n = bin_.size();
+  const uint32_t rows = static_cast<uint32_t>(rows_);
+  const int shift = row_shift_;
+  const uint32_t* __restrict bins = bin_.data();
+  const float* __restrict cc = column_coordinate_.data();
+  const float* __restrict rr = r_.data();
+  const float* __restrict hh = height_.data();
+  uint8_t* __restrict labels = out->labels.data();
+  float* __restrict prob = out->p_obstacle.data();
+  cell_.resize(n);
+  uint32_t* __restrict cell = cell_.data();
+  uint32_t* __restrict image = range_image_.data();
+  const float thr = tol.obstacle_threshold;
+  const float g_below = p.negative_gnd_error_max > 0.f ? p.negative_gnd_error_max : tol.gnd_error_max_base;
+  const int K = knot_stride_, last_k = knots_ - 2;
+  const float* knots = knot_height_.data() + kKnotPad;
+  const float inv_seg = inv_segment_;
+  // Eq 3.15 for a return `depth` below the line (GndErrorMax below the line).
+  auto eq315 = [&](float depth, float r) {
+    float gt = depth / (g_below + tol.gnd_error_max_per_m * r);
+    gt = gt < 1.f ? gt : 1.f;
+    float st = depth / (r * (tol.slope_error_max_base + tol.slope_error_max_per_m * r));
+    st = st < 1.f ? st : 1.f;
+    return gt * st;
+  };
+  // One pass: the range image (cell = sub-column << row_shift_ | row; each cell keeps the last
+  // return in it) and negative obstacles measured from the foot of a step. Where the line's
+  // segment climbs a step within it (a curb), the road in front of the step lies below the
+  // segment but level with the ground before it: a return that eq 3.15 called a negative
+  // obstacle is scored again with its depth below the lower of the line and its previous
+  // segment extended. The step's own lowest returns, which the smeared segment also put below
+  // the line, are found in the second pass as the feet of faces.
+  const float cells_per_column = static_cast<float>(p.neighbour_cells_per_column);
+  const int last_sub = columns_ * p.neighbour_cells_per_column - 1;
+  const bool negative = p.negative_obstacles;
+  for (std::size_t i = 0; i < n; ++i) {
+    const uint32_t b = bins[i];
+    if (b == unknown_bin_) {
+      cell[i] = 0xFFFFFFFFu;
+      continue;
+    }
+    int sub = static_cast<int>(cc[i] * cells_per_column);  // cc in [0, columns_)
+    sub = sub < last_sub ? sub : last_sub;
+    const uint32_t c = static_cast<uint32_t>(sub) << shift | (b & (rows - 1));
+    cell[i] = c;
+    image[c] = static_cast<uint32_t>(i);
+    if (!negative || labels[i] != kLabelObstacle) continue;
+    const float r = rr[i], h = hh[i];
+    const float f = r * inv_seg;
+    int k = static_cast<int>(f);
+    k = k < last_k ? k : last_k;
+    const float* kh = knots + static_cast<std::size_t>(b >> shift) * K;
+    const float t = f - static_cast<float>(k);
+    const float below = kh[k] + (kh[k + 1] - kh[k]) * t - h;
+    if (!(below > 0.f)) continue;
+    const float km1 = k > 0 ? kh[k - 1] : 0.f;
+    const float depth = kh[k] + (kh[k] - km1) * t - h;
+    if (!(depth < below)) continue;
+    if (prob[i] > eq315(below, r) + 1e-6f) continue;  // a vertical-surface term made it an obstacle
+    const float p_step = eq315(depth > 0.f ? depth : 0.f, r);
+    if (p_step > thr) continue;
+    prob[i] = p_step;
+    labels[i] = kLabelGround;
+  }
+  // Per row: neighbour_spacing_fraction of the spacing between it and the next row up on flat
+  // ground, per r^2 (spacing = r^2 tan(gap) / sensor height).
+  const float hs = sensor_height > 0.1f ? sensor_height : 0.1f;
+  float gap_per_r2[kMaxRingRows];
+  for (uint32_t row = 0; row < rows && row < static_cast<uint32_t>(kMaxRingRows); ++row) {
+    gap_per_r2[row] = p.neighbour_spacing_fraction * row_gap_tan_[row] / hs;
+  }
+  const float max_dr = p.neighbour_max_dr;
+  const float step = p.neighbour_min_step;
+  const float above_threshold = std::nextafter(thr, 2.f);
+  // The neighbour in the row below (d = -1) or above (d = +1): its index, or n.
+  auto neighbour = [&](uint32_t c, uint32_t d) -> std::size_t {
+    const uint32_t cn = c + d;
+    const uint32_t j = image[cn];
+    return j < n && cell[j] == cn ? j : n;
+  };
+  neighbour_obstacles_.clear();
+  for (std::size_t i = 0; i < n; ++i) {
+    if (labels[i] != kLabelGround) continue;
+    const uint32_t c = cell[i];
+    const uint32_t row = c & (rows - 1);
+    const float r = rr[i], h = hh[i];
+    float p_face = -1.f;
+    if (row > 0) {
+      const std::size_t j = neighbour(c, 0xFFFFFFFFu);
+      if (j < n) {
+        const float dr = std::fabs(r - rr[j]);
+        const float same_face = std::min(max_dr, gap_per_r2[row - 1] * r * r);
+        if (labels[j] == kLabelObstacle && dr < same_face && h >= hh[j] + step) {
+          p_face = prob[j];  // the top of a face
+        } else if (dr < 2.f * max_dr && h > hh[j] &&
+                   groundHeight(static_cast<int>(bins[j] >> shift), rr[j]) - hh[j] > g_below) {
+          p_face = prob[j];  // the top of a hole's far wall
+        }
+      }
+    }
+    if (row + 1 < rows) {
+      const std::size_t j = neighbour(c, 1u);
+      if (j < n && labels[j] == kLabelObstacle && hh[j] >= h + step &&
+          std::fabs(r - rr[j]) < std::min(max_dr, gap_per_r2[row] * r * r) && prob[j] > p_face) {
+        p_face = prob[j];  // the foot of a face
+      }
+    }
+    if (p_face >= 0.f) {
+      neighbour_obstacles_.emplace_back(static_cast<uint32_t>(i), std::max(p_face, above_threshold));
+    }
+  }
+  // Applied after the pass: a relabelled return does not make its own neighbours obstacles.
+  for (const auto& o : neighbour_obstacles_) {
+    labels[o.first] = kLabelObstacle;
+    prob[o.first] = o.second;
+  }
+}
+
 bool setVerticalScanParam(VerticalScanParams* p, const std::string& key, double value,
                           std::string* error) {
   const float f = static_cast<float>(value);
@@ -1412,6 +1565,9 @@ bool setVerticalScanParam(VerticalScanParams* p, const std::string& key, double 
       {"vertical_slope_max", &p->vertical_slope_max},
       {"vertical_foot_slope", &p->vertical_foot_slope},
       {"negative_support_distance", &p->negative_support_distance},
+      {"neighbour_max_dr", &p->neighbour_max_dr},
+      {"neighbour_spacing_fraction", &p->neighbour_spacing_fraction},
+      {"neighbour_min_step", &p->neighbour_min_step},
   };
   for (const FloatField& ff : floats) {
     if (key == ff.name) { *ff.field = f; return true; }
@@ -1423,6 +1579,11 @@ bool setVerticalScanParam(VerticalScanParams* p, const std::string& key, double 
   if (key == "couple_columns") { p->couple_columns = value != 0.0; return true; }
   if (key == "negative_obstacles") { p->negative_obstacles = value != 0.0; return true; }
   if (key == "vertical_surfaces") { p->vertical_surfaces = value != 0.0; return true; }
+  if (key == "laser_neighbours") { p->laser_neighbours = value != 0.0; return true; }
+  if (key == "neighbour_cells_per_column") {
+    p->neighbour_cells_per_column = static_cast<int>(value);
+    return true;
+  }
   if (error) *error = "unknown vertical scan parameter '" + key + "'";
   return false;
 }
