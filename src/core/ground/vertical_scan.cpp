@@ -1432,14 +1432,10 @@ void VerticalScanGround::labelFromLaserNeighbours(float sensor_height, GroundCla
   const int K = knot_stride_, last_k = knots_ - 2;
   const float* knots = knot_height_.data() + kKnotPad;
   const float inv_seg = inv_segment_;
-  // Eq 3.15 for a return `depth` below the line (GndErrorMax below the line).
-  auto eq315 = [&](float depth, float r) {
-    float gt = depth / (g_below + tol.gnd_error_max_per_m * r);
-    gt = gt < 1.f ? gt : 1.f;
-    float st = depth / (r * (tol.slope_error_max_base + tol.slope_error_max_per_m * r));
-    st = st < 1.f ? st : 1.f;
-    return gt * st;
-  };
+  // Eq 3.15 for a return `depth` below the line (with GndErrorMax below the line).
+  ObstacleToleranceParams below_tol = tol;
+  below_tol.gnd_error_max_base = g_below;
+  auto eq315 = [&](float depth, float r) { return obstacleProbability(depth, depth / r, r, below_tol); };
   // One pass: the range image (cell = sub-column << row_shift_ | row; each cell keeps the last
   // return in it) and negative obstacles measured from the foot of a step. Where the line's
   // segment climbs a step within it (a curb), the road in front of the step lies below the
