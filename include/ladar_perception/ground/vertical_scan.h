@@ -305,16 +305,18 @@ class VerticalScanGround : public GroundModel {
   std::vector<float> coupled_;                 // like knot_height_
   // labelPoints: groups of four returns with a negative obstacle, (group << 4) | lane bits.
   std::vector<uint32_t, DefaultInitAllocator<uint32_t>> below_line_groups_;
+  std::size_t below_line_count_ = 0;   // groups listed in the last scan
+  bool below_line_listed_ = false;     // the 4-wide loop listed them (support gate on)
+  std::size_t below_line_from_ = 0;    // where the scalar loop took over (not listed)
   std::vector<float> slope_coupled_;           // columns_
   std::vector<float> rep_;  // bin representatives' (r, height) pairs, r < 0: empty bin
   std::vector<float> column_slope_;            // straight estimate per column
   std::vector<int> column_support_;
   std::vector<int> column_count_;
-  // laser_neighbours: each return's column coordinate (binPoints), its range-image cell, the
-  // range image (the last return written to each cell; a cell's entry is valid when that
-  // return's own cell is the cell, so the image is never cleared), the tangent of the angle
-  // to the next row up per row, and the returns to relabel.
-  ScratchBuffer<float> column_coordinate_;
+  // laser_neighbours: each return's range-image cell (binPoints), the range image (the last
+  // return written to each cell; a cell's entry is valid when that return's own cell is the
+  // cell, so the image is never cleared), the tangent of the angle to the next row up per
+  // row, and the returns to relabel.
   ScratchBuffer<uint32_t> cell_;
   std::vector<uint32_t> range_image_;
   std::vector<float> row_gap_tan_;

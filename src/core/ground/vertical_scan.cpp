@@ -19,6 +19,7 @@ namespace {
 
 constexpr float kPi = 3.14159265358979f;
 constexpr int kMaxRingRows = 128;   // rows of the bin grid when the cloud carries `ring`
+constexpr uint32_t kNoCell = 0xFFFFFFFFu;  // laser_neighbours: the cell of an unknown return
 constexpr float kMinR = 0.05f;      // horizontal distance floor for Height / r [m]
 constexpr int kAtanCells = 2048;    // atan LUT cells on [0, 1]: < 0.015 deg error
 
@@ -583,7 +584,12 @@ void VerticalScanGround::binPoints(const PointCloudView& view, const SensorPose&
   uint32_t* __restrict bins = bin_.data();
   float* __restrict rr = r_.data();
   float* __restrict hh = height_.data();
-  float* __restrict cc = kSubColumns ? column_coordinate_.data() : nullptr;  // laser_neighbours
+  // laser_neighbours: each return's range-image cell (sub-column << row_shift_ | row, or
+  // kNoCell), and the image entry of that cell (the last return in it, in input order).
+  uint32_t* __restrict cell = kSubColumns ? cell_.data() : nullptr;
+  uint32_t* __restrict image = kSubColumns ? range_image_.data() : nullptr;
+  const float cells_per_column = static_cast<float>(params_.neighbour_cells_per_column);
+  const float last_sub = static_cast<float>(columns_ * params_.neighbour_cells_per_column - 1);
   uint8_t* __restrict labels = out->labels.data();
   float* __restrict prob = out->p_obstacle.data();
   uint32_t x_off = 0, y_off = 0, z_off = 0;
@@ -620,6 +626,8 @@ void VerticalScanGround::binPoints(const PointCloudView& view, const SensorPose&
     const float quarter = 0.25f * static_cast<float>(columns_);
     const __m128 v_quarter = _mm_set1_ps(quarter), v_half_turn = _mm_set1_ps(2.f * quarter);
     const __m128 v_sign_bit = _mm_castsi128_ps(_mm_set1_epi32(static_cast<int>(0x80000000u)));
+    const __m128 v_cells_per_column = _mm_set1_ps(cells_per_column), v_last_sub = _mm_set1_ps(last_sub);
+    const __m128i v_no_cell = _mm_set1_epi32(-1);
     for (; i + 4 <= n; i += 4) {
       const uint8_t* pt = src + i * step;
       __m128 X = _mm_loadu_ps(reinterpret_cast<const float*>(pt));
@@ -640,6 +648,7 @@ void VerticalScanGround::binPoints(const PointCloudView& view, const SensorPose&
       const int valid_bits = _mm_movemask_ps(valid);
       if (valid_bits == 0) {
         for (int l = 0; l < 4; ++l) {
+          if (kSubColumns) cell[i + l] = kNoCell;
           bins[i + l] = unknown_bin;
           rr[i + l] = 0.f;
           hh[i + l] = 0.f;
@@ -689,7 +698,27 @@ void VerticalScanGround::binPoints(const PointCloudView& view, const SensorPose&
                              row_lut[row_i[3]]);
       }
       __m128i bin = _mm_add_epi32(_mm_sll_epi32(_mm_cvttps_epi32(a), v_shift), row);
-      if (kSubColumns) _mm_storeu_ps(cc + i, a);
+      if (kSubColumns) {
+        // The sub-column as the scalar loop computes it: trunc(min(x, L)) = min(trunc(x), L)
+        // for an integer L.
+        const __m128i sub = _mm_cvttps_epi32(_mm_min_ps(_mm_mul_ps(a, v_cells_per_column), v_last_sub));
+        const __m128i c = _mm_or_si128(_mm_sll_epi32(sub, v_shift), row);
+        alignas(16) uint32_t c4[4];
+        _mm_store_si128(reinterpret_cast<__m128i*>(c4), c);
+        _mm_storeu_si128(reinterpret_cast<__m128i*>(cell + i),
+                         _mm_or_si128(_mm_and_si128(valid_i, c), _mm_andnot_si128(valid_i, v_no_cell)));
+        const uint32_t i0 = static_cast<uint32_t>(i);
+        if (valid_bits == 0xF) {
+          image[c4[0]] = i0;
+          image[c4[1]] = i0 + 1;
+          image[c4[2]] = i0 + 2;
+          image[c4[3]] = i0 + 3;
+        } else {
+          for (int l = 0; l < 4; ++l) {
+            if (valid_bits >> l & 1) image[c4[l]] = i0 + static_cast<uint32_t>(l);
+          }
+        }
+      }
       _mm_storeu_ps(rr + i, _mm_and_ps(rc, valid));
       _mm_storeu_ps(hh + i, _mm_and_ps(_mm_add_ps(Z, v_tz), valid));
       if (valid_bits != 0xF) {
@@ -720,6 +749,7 @@ void VerticalScanGround::binPoints(const PointCloudView& view, const SensorPose&
     const float d2 = rs2 + zs * zs;
     // NaN compares false: NaN/Inf and out-of-range returns are unknown.
     if (!(d2 >= min_r2 && d2 <= max_r2)) {
+      if (kSubColumns) cell[i] = kNoCell;
       bins[i] = unknown_bin;
       rr[i] = 0.f;
       hh[i] = 0.f;
@@ -758,7 +788,13 @@ void VerticalScanGround::binPoints(const PointCloudView& view, const SensorPose&
     a = a < max_c ? a : max_c;
     const uint32_t bin = (static_cast<uint32_t>(a) << shift) + row;
     bins[i] = bin;
-    if (kSubColumns) cc[i] = a;
+    if (kSubColumns) {
+      float sub = a * cells_per_column;
+      sub = sub < last_sub ? sub : last_sub;
+      const uint32_t c = static_cast<uint32_t>(static_cast<int>(sub)) << shift | static_cast<uint32_t>(row);
+      cell[i] = c;
+      image[c] = static_cast<uint32_t>(i);
+    }
     rr[i] = r > kMinR ? r : kMinR;
     hh[i] = gz;
   }
@@ -796,7 +832,7 @@ void VerticalScanGround::classify(const PointCloudView& view, const SensorPose& 
   const bool fast = view.packedFloatXYZ() &&
                     (view.height() <= 1 || view.layout().row_step == view.width() * view.layout().point_step);
   const bool sub = params_.laser_neighbours;
-  if (sub) column_coordinate_.resize(n);
+  if (sub) cell_.resize(n);
   // binPoints<ring, tilted, fast, sub> for the run-time flags.
   auto bin_with = [&](auto ring_c, auto tilted_c, auto fast_c) {
     if (sub) {
@@ -1186,6 +1222,7 @@ void VerticalScanGround::labelPoints(GroundClassification* out) {
     return vertical_probability(b, r, h, g, 0.f, 0.f);
   };
   std::size_t i = 0;
+  below_line_listed_ = false;
 #if defined(__SSE2__)
   // Four returns at a time, each lane repeating the scalar loop's arithmetic below (minps(a, b)
   // is a < b ? a : b); the knot index col * K + k is formed in float, exact below 2^24.
@@ -1364,8 +1401,11 @@ void VerticalScanGround::labelPoints(GroundClassification* out) {
         labels[q] = prob[q] > thr ? kLabelObstacle : kLabelGround;
       }
     }
+    below_line_count_ = below_count;
+    below_line_listed_ = support_gate;
   }
 #endif
+  below_line_from_ = i;
   for (; i < n; ++i) {
     const uint32_t b = bins[i];
     if (b == unknown_bin_) continue;
@@ -1419,14 +1459,12 @@ void VerticalScanGround::labelFromLaserNeighbours(float sensor_height, GroundCla
   const uint32_t rows = static_cast<uint32_t>(rows_);
   const int shift = row_shift_;
   const uint32_t* __restrict bins = bin_.data();
-  const float* __restrict cc = column_coordinate_.data();
   const float* __restrict rr = r_.data();
   const float* __restrict hh = height_.data();
   uint8_t* __restrict labels = out->labels.data();
   float* __restrict prob = out->p_obstacle.data();
-  cell_.resize(n);
-  uint32_t* __restrict cell = cell_.data();
-  uint32_t* __restrict image = range_image_.data();
+  const uint32_t* __restrict cell = cell_.data();     // written by binPoints()
+  const uint32_t* __restrict image = range_image_.data();
   const float thr = tol.obstacle_threshold;
   const float g_below = p.negative_gnd_error_max > 0.f ? p.negative_gnd_error_max : tol.gnd_error_max_base;
   const int K = knot_stride_, last_k = knots_ - 2;
@@ -1436,28 +1474,15 @@ void VerticalScanGround::labelFromLaserNeighbours(float sensor_height, GroundCla
   ObstacleToleranceParams below_tol = tol;
   below_tol.gnd_error_max_base = g_below;
   auto eq315 = [&](float depth, float r) { return obstacleProbability(depth, depth / r, r, below_tol); };
-  // One pass: the range image (cell = sub-column << row_shift_ | row; each cell keeps the last
-  // return in it) and negative obstacles measured from the foot of a step. Where the line's
-  // segment climbs a step within it (a curb), the road in front of the step lies below the
-  // segment but level with the ground before it: a return that eq 3.15 called a negative
-  // obstacle is scored again with its depth below the lower of the line and its previous
-  // segment extended. The step's own lowest returns, which the smeared segment also put below
-  // the line, are found in the second pass as the feet of faces.
-  const float cells_per_column = static_cast<float>(p.neighbour_cells_per_column);
-  const int last_sub = columns_ * p.neighbour_cells_per_column - 1;
-  const bool negative = p.negative_obstacles;
-  for (std::size_t i = 0; i < n; ++i) {
+  // Negative obstacles measured from the foot of a step. Where the line's segment climbs a
+  // step within it (a curb), the road in front of the step lies below the segment but level
+  // with the ground before it: a return that eq 3.15 called a negative obstacle is scored
+  // again with its depth below the lower of the line and its previous segment extended. The
+  // step's own lowest returns, which the smeared segment also put below the line, are found
+  // below as the feet of faces.
+  auto step_foot_depth = [&](std::size_t i) {
+    if (labels[i] != kLabelObstacle) return;
     const uint32_t b = bins[i];
-    if (b == unknown_bin_) {
-      cell[i] = 0xFFFFFFFFu;
-      continue;
-    }
-    int sub = static_cast<int>(cc[i] * cells_per_column);  // cc in [0, columns_)
-    sub = sub < last_sub ? sub : last_sub;
-    const uint32_t c = static_cast<uint32_t>(sub) << shift | (b & (rows - 1));
-    cell[i] = c;
-    image[c] = static_cast<uint32_t>(i);
-    if (!negative || labels[i] != kLabelObstacle) continue;
     const float r = rr[i], h = hh[i];
     const float f = r * inv_seg;
     int k = static_cast<int>(f);
@@ -1465,15 +1490,35 @@ void VerticalScanGround::labelFromLaserNeighbours(float sensor_height, GroundCla
     const float* kh = knots + static_cast<std::size_t>(b >> shift) * K;
     const float t = f - static_cast<float>(k);
     const float below = kh[k] + (kh[k + 1] - kh[k]) * t - h;
-    if (!(below > 0.f)) continue;
+    if (!(below > 0.f)) return;
     const float km1 = k > 0 ? kh[k - 1] : 0.f;
     const float depth = kh[k] + (kh[k] - km1) * t - h;
-    if (!(depth < below)) continue;
-    if (prob[i] > eq315(below, r) + 1e-6f) continue;  // a vertical-surface term made it an obstacle
+    if (!(depth < below)) return;
+    if (prob[i] > eq315(below, r) + 1e-6f) return;  // a vertical-surface term made it an obstacle
     const float p_step = eq315(depth > 0.f ? depth : 0.f, r);
-    if (p_step > thr) continue;
+    if (p_step > thr) return;
     prob[i] = p_step;
     labels[i] = kLabelGround;
+  };
+  if (p.negative_obstacles) {
+    if (below_line_listed_) {
+      // labelPoints() listed its 4-wide loop's obstacles below the line; the rest of the scan
+      // went through its scalar loop.
+      const uint32_t* groups = below_line_groups_.data();
+      for (std::size_t c = 0; c < below_line_count_; ++c) {
+        const std::size_t group = static_cast<std::size_t>(groups[c] >> 4) * 4;
+        for (unsigned lanes = groups[c] & 15u; lanes; lanes &= lanes - 1) {
+          step_foot_depth(group + static_cast<std::size_t>(__builtin_ctz(lanes)));
+        }
+      }
+      for (std::size_t i = below_line_from_; i < n; ++i) {
+        if (bins[i] != unknown_bin_) step_foot_depth(i);
+      }
+    } else {
+      for (std::size_t i = 0; i < n; ++i) {
+        if (bins[i] != unknown_bin_) step_foot_depth(i);
+      }
+    }
   }
   // Per row: neighbour_spacing_fraction of the spacing between it and the next row up on flat
   // ground, per r^2 (spacing = r^2 tan(gap) / sensor height).
@@ -1485,15 +1530,15 @@ void VerticalScanGround::labelFromLaserNeighbours(float sensor_height, GroundCla
   const float max_dr = p.neighbour_max_dr;
   const float step = p.neighbour_min_step;
   const float above_threshold = std::nextafter(thr, 2.f);
-  // The neighbour in the row below (d = -1) or above (d = +1): its index, or n.
+  // The neighbour in the row below (d = -1) or above (d = +1): its index, or n. An image entry
+  // is the cell's when that return's own cell is the cell (the image is never cleared).
   auto neighbour = [&](uint32_t c, uint32_t d) -> std::size_t {
     const uint32_t cn = c + d;
     const uint32_t j = image[cn];
     return j < n && cell[j] == cn ? j : n;
   };
   neighbour_obstacles_.clear();
-  for (std::size_t i = 0; i < n; ++i) {
-    if (labels[i] != kLabelGround) continue;
+  auto face_or_wall = [&](std::size_t i) {
     const uint32_t c = cell[i];
     const uint32_t row = c & (rows - 1);
     const float r = rr[i], h = hh[i];
@@ -1502,8 +1547,8 @@ void VerticalScanGround::labelFromLaserNeighbours(float sensor_height, GroundCla
       const std::size_t j = neighbour(c, 0xFFFFFFFFu);
       if (j < n) {
         const float dr = std::fabs(r - rr[j]);
-        const float same_face = std::min(max_dr, gap_per_r2[row - 1] * r * r);
-        if (labels[j] == kLabelObstacle && dr < same_face && h >= hh[j] + step) {
+        if (labels[j] == kLabelObstacle && h >= hh[j] + step &&
+            dr < std::min(max_dr, gap_per_r2[row - 1] * r * r)) {
           p_face = prob[j];  // the top of a face
         } else if (dr < 2.f * max_dr && h > hh[j] &&
                    groundHeight(static_cast<int>(bins[j] >> shift), rr[j]) - hh[j] > g_below) {
@@ -1521,6 +1566,21 @@ void VerticalScanGround::labelFromLaserNeighbours(float sensor_height, GroundCla
     if (p_face >= 0.f) {
       neighbour_obstacles_.emplace_back(static_cast<uint32_t>(i), std::max(p_face, above_threshold));
     }
+  };
+  // Every ground return, 16 labels at a time (ground is label 0).
+  static_assert(kLabelGround == 0, "the ground scan assumes ground = 0");
+  std::size_t i = 0;
+#if defined(__SSE2__)
+  for (; i + 16 <= n; i += 16) {
+    const __m128i l16 = _mm_loadu_si128(reinterpret_cast<const __m128i*>(labels + i));
+    for (unsigned ground = static_cast<unsigned>(_mm_movemask_epi8(_mm_cmpeq_epi8(l16, _mm_setzero_si128())));
+         ground; ground &= ground - 1) {
+      face_or_wall(i + static_cast<std::size_t>(__builtin_ctz(ground)));
+    }
+  }
+#endif
+  for (; i < n; ++i) {
+    if (labels[i] == kLabelGround) face_or_wall(i);
   }
   // Applied after the pass: a relabelled return does not make its own neighbours obstacles.
   for (const auto& o : neighbour_obstacles_) {
