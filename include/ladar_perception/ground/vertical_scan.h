@@ -308,6 +308,11 @@ class VerticalScanGround : public GroundModel {
   std::size_t below_line_count_ = 0;   // groups listed in the last scan
   bool below_line_listed_ = false;     // the 4-wide loop listed them (support gate on)
   std::size_t below_line_from_ = 0;    // where the scalar loop took over (not listed)
+  // laser_neighbours: groups of four with a return deeper than negative_gnd_error_max under
+  // the line, listed by the same loop (deep_listed_: it ran), as below_line_groups_.
+  std::vector<uint32_t, DefaultInitAllocator<uint32_t>> deep_groups_;
+  std::size_t deep_count_ = 0;
+  bool deep_listed_ = false;
   std::vector<float> slope_coupled_;           // columns_
   std::vector<float> rep_;  // bin representatives' (r, height) pairs, r < 0: empty bin
   std::vector<float> column_slope_;            // straight estimate per column
@@ -319,6 +324,10 @@ class VerticalScanGround : public GroundModel {
   // row, and the returns to relabel.
   ScratchBuffer<uint32_t> cell_;
   std::vector<uint32_t> range_image_;
+  // One byte per range-image cell (and one before and after): the cells next to an obstacle
+  // or above a deep return carry this scan's stamp, so only their ground returns are tested.
+  std::vector<uint8_t> cell_mark_;
+  uint8_t mark_stamp_ = 0;
   std::vector<float> row_gap_tan_;
   std::vector<std::pair<uint32_t, float>> neighbour_obstacles_;
 };

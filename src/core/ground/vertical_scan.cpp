@@ -17,6 +17,12 @@ namespace ladar_perception {
 
 namespace {
 
+#if defined(__GNUC__)
+#define LADAR_ALWAYS_INLINE __attribute__((always_inline))
+#else
+#define LADAR_ALWAYS_INLINE
+#endif
+
 constexpr float kPi = 3.14159265358979f;
 constexpr int kMaxRingRows = 128;   // rows of the bin grid when the cloud carries `ring`
 constexpr uint32_t kNoCell = 0xFFFFFFFFu;  // laser_neighbours: the cell of an unknown return
@@ -527,6 +533,8 @@ void VerticalScanGround::setParams(const VerticalScanParams& params) {
     // Sized for the largest bin grid (kMaxRingRows rows); filled once, never cleared.
     range_image_.assign(static_cast<std::size_t>(columns_) * p.neighbour_cells_per_column * kMaxRingRows,
                         0xFFFFFFFFu);
+    cell_mark_.assign(range_image_.size() + 2, 0);
+    mark_stamp_ = 0;
     // The angle from each row to the next one up, from the laser table (0.4 degrees beyond it).
     std::vector<float> el = p.laser_elevations_deg.empty() ? hdl64eElevationsDeg() : p.laser_elevations_deg;
     std::sort(el.begin(), el.end());
@@ -537,6 +545,8 @@ void VerticalScanGround::setParams(const VerticalScanParams& params) {
   } else {
     range_image_.clear();
     range_image_.shrink_to_fit();
+    cell_mark_.clear();
+    cell_mark_.shrink_to_fit();
   }
 }
 
@@ -1223,6 +1233,7 @@ void VerticalScanGround::labelPoints(GroundClassification* out) {
   };
   std::size_t i = 0;
   below_line_listed_ = false;
+  deep_listed_ = false;
 #if defined(__SSE2__)
   // Four returns at a time, each lane repeating the scalar loop's arithmetic below (minps(a, b)
   // is a < b ? a : b); the knot index col * K + k is formed in float, exact below 2^24.
@@ -1262,12 +1273,19 @@ void VerticalScanGround::labelPoints(GroundClassification* out) {
     below_line_groups_.resize(support_gate ? n / 4 + 1 : 0);
     uint32_t* const below_groups = below_line_groups_.data();
     std::size_t below_count = 0;
+    // laser_neighbours: groups of four with a return more than about g_below under the line
+    // (the floor or wall of a hole: labelFromLaserNeighbours() looks above them).
+    const bool list_deep = p.laser_neighbours;
+    deep_groups_.resize(list_deep ? n / 4 + 1 : 0);
+    uint32_t* const deep_groups = deep_groups_.data();
+    std::size_t deep_count = 0;
+    const __m128 v_deep = _mm_set1_ps(g_below - 1e-3f);
     // The loop, specialised for the default settings (every term on, SlopeErrorMax constant)
     // so that their tests leave it; any other combination runs the same code with run-time
     // tests. It captures by value: the label stores (bytes) may alias anything it read
     // through a reference, which would be reloaded after every store.
-    auto sse_loop = [=, &below_count](auto negative_c, auto vertical_c, auto foot_c, auto support_gate_c,
-                                      auto growing_slope_tolerance_c) mutable {
+    auto sse_loop = [=, &below_count, &deep_count](auto negative_c, auto vertical_c, auto foot_c, auto support_gate_c,
+                                      auto growing_slope_tolerance_c, auto deep_c) mutable LADAR_ALWAYS_INLINE {
       for (; i + 4 <= n; i += 4) {
         const __m128i b = _mm_loadu_si128(reinterpret_cast<const __m128i*>(bins + i));
         const __m128i invalid = _mm_cmpeq_epi32(b, v_invalid);
@@ -1295,6 +1313,10 @@ void VerticalScanGround::labelPoints(GroundClassification* out) {
         const __m128 abs_error = _mm_and_ps(gnd_error, v_abs);
         const __m128 above = _mm_cmpgt_ps(gnd_error, v_zero);
         const int below_line_bits = support_gate_c ? _mm_movemask_ps(above) : 0;  // GndError > 0
+        if (deep_c) {
+          const int deep_bits = _mm_movemask_ps(_mm_cmpgt_ps(gnd_error, v_deep)) & ~invalid_bits;
+          if (deep_bits) deep_groups[deep_count++] = static_cast<uint32_t>(i >> 2) << 4 | deep_bits;
+        }
         const __m128 g_max =
             _mm_add_ps(_mm_add_ps(v_g_above, _mm_and_ps(above, v_g_below_delta)), _mm_mul_ps(v_g_per_m, r));
         // SlopeErrorMax = s_base + s_per_m * r, exactly s_base when it does not grow.
@@ -1389,9 +1411,17 @@ void VerticalScanGround::labelPoints(GroundClassification* out) {
       return i;
     };
     if (negative && vertical && foot && support_gate && s_per_m == 0.f) {
-      i = sse_loop(std::true_type{}, std::true_type{}, std::true_type{}, std::true_type{}, std::false_type{});
+      if (list_deep) {
+        i = sse_loop(std::true_type{}, std::true_type{}, std::true_type{}, std::true_type{}, std::false_type{},
+                     std::true_type{});
+        deep_count_ = deep_count;
+        deep_listed_ = true;
+      } else {
+        i = sse_loop(std::true_type{}, std::true_type{}, std::true_type{}, std::true_type{}, std::false_type{},
+                     std::false_type{});
+      }
     } else {
-      i = sse_loop(negative, vertical, foot, support_gate, true);
+      i = sse_loop(negative, vertical, foot, support_gate, true, std::false_type{});
     }
     for (std::size_t c = 0; c < below_count; ++c) {
       const std::size_t group = static_cast<std::size_t>(below_groups[c] >> 4) * 4;
@@ -1567,20 +1597,64 @@ void VerticalScanGround::labelFromLaserNeighbours(float sensor_height, GroundCla
       neighbour_obstacles_.emplace_back(static_cast<uint32_t>(i), std::max(p_face, above_threshold));
     }
   };
-  // Every ground return, 16 labels at a time (ground is label 0).
+  // The ground returns to test: where labelPoints() listed the deep returns, only those in a
+  // cell next to an obstacle (top and foot of a face) or above a deep return (a hole's far
+  // wall), a superset of the cells whose neighbour can relabel them; else all. 16 labels at
+  // a time (ground is label 0).
   static_assert(kLabelGround == 0, "the ground scan assumes ground = 0");
+  const bool marked = deep_listed_;
+  uint8_t stamp = 0;
+  uint8_t* const mark = cell_mark_.data() + 1;  // mark[-1 .. cells]
+  if (marked) {
+    if (++mark_stamp_ == 0) {  // a wrap: forget the stamps of 255 scans ago
+      std::fill(cell_mark_.begin(), cell_mark_.end(), 0);
+      mark_stamp_ = 1;
+    }
+    stamp = mark_stamp_;
+    auto mark_around = [&](std::size_t j) {
+      const uint32_t c = cell[j];
+      mark[static_cast<int64_t>(c) - 1] = stamp;
+      mark[c + 1] = stamp;
+    };
+    std::size_t j = 0;
+#if defined(__SSE2__)
+    const __m128i v_obstacle = _mm_set1_epi8(static_cast<char>(kLabelObstacle));
+    for (; j + 16 <= n; j += 16) {
+      const __m128i l16 = _mm_loadu_si128(reinterpret_cast<const __m128i*>(labels + j));
+      for (unsigned o = static_cast<unsigned>(_mm_movemask_epi8(_mm_cmpeq_epi8(l16, v_obstacle))); o; o &= o - 1) {
+        mark_around(j + static_cast<std::size_t>(__builtin_ctz(o)));
+      }
+    }
+#endif
+    for (; j < n; ++j) {
+      if (labels[j] == kLabelObstacle) mark_around(j);
+    }
+    const uint32_t* groups = deep_groups_.data();
+    for (std::size_t g = 0; g < deep_count_; ++g) {
+      const std::size_t group = static_cast<std::size_t>(groups[g] >> 4) * 4;
+      for (unsigned lanes = groups[g] & 15u; lanes; lanes &= lanes - 1) {
+        mark[cell[group + static_cast<std::size_t>(__builtin_ctz(lanes))] + 1] = stamp;
+      }
+    }
+    for (std::size_t q = below_line_from_; q < n; ++q) {  // past the listing loop
+      if (bins[q] != unknown_bin_) mark[cell[q] + 1] = stamp;
+    }
+  }
+  auto test = [&](std::size_t i) {
+    if (!marked || mark[cell[i]] == stamp) face_or_wall(i);
+  };
   std::size_t i = 0;
 #if defined(__SSE2__)
   for (; i + 16 <= n; i += 16) {
     const __m128i l16 = _mm_loadu_si128(reinterpret_cast<const __m128i*>(labels + i));
     for (unsigned ground = static_cast<unsigned>(_mm_movemask_epi8(_mm_cmpeq_epi8(l16, _mm_setzero_si128())));
          ground; ground &= ground - 1) {
-      face_or_wall(i + static_cast<std::size_t>(__builtin_ctz(ground)));
+      test(i + static_cast<std::size_t>(__builtin_ctz(ground)));
     }
   }
 #endif
   for (; i < n; ++i) {
-    if (labels[i] == kLabelGround) face_or_wall(i);
+    if (labels[i] == kLabelGround) test(i);
   }
   // Applied after the pass: a relabelled return does not make its own neighbours obstacles.
   for (const auto& o : neighbour_obstacles_) {
