@@ -8,6 +8,7 @@
 // is reported in the ground_eval table rather than hidden.
 #include <cstdio>
 #include <cstring>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -216,4 +217,42 @@ TEST(GroundAccuracy, LaserNeighboursDoNotDependOnTheInputOrder) {
   // Of returns that share a range-image cell the last one in input order is the neighbour, so
   // a few labels could differ in principle; none do in this scan.
   EXPECT_LE(differ, n / 1000) << differ << " of " << n;
+}
+
+TEST(GroundAccuracy, LaserNeighboursTestEveryReturnTheyCanRelabel) {
+  // With the default terms the face rules run only on ground returns in a cell next to an
+  // obstacle or above a deep return. A SlopeErrorMax growth of the smallest denormal per metre
+  // adds nothing to SlopeErrorMax (0.004 + 1e-43 rounds to 0.004) but takes the labelling's
+  // general loop, after which every ground return is tested: the labels and P(obstacle) must
+  // be the same. Urban (faces) and potholes (far walls); the same model object over both
+  // worlds and both parameter sets, so the cell stamps carry over between scans.
+  SensorPose pose;
+  pose.sensor_to_ground = evaluationSensorMount().cast<float>();
+  VerticalScanParams every = verticalScanNeighboursParams();
+  every.tolerances.slope_error_max_per_m = std::numeric_limits<float>::denorm_min();
+  VerticalScanGround marked(verticalScanNeighboursParams()), all(every);
+  for (const char* name : {"urban", "potholes"}) {
+    sim::World world;
+    std::string error;
+    ASSERT_TRUE(sim::makeStandardWorld(name, 1, &world, &error)) << error;
+    for (int k = 0; k < 2; ++k) {
+      sim::SimulatedScan scan;
+      sim::simulateVelodyneRevolution(world,
+                                      world.drivePose((0.3 + 0.4 * k) * world.driveDuration()) * evaluationSensorMount(),
+                                      sim::VelodyneModel::hdl64e(sim::NoiseProfile::kDatasheet), 20 + k, &scan);
+      PointCloudView view;
+      ASSERT_TRUE(scan.cloud.view(&view, &error)) << error;
+      GroundClassification a, b;
+      marked.classify(view, pose, &a);
+      all.classify(view, pose, &b);
+      ASSERT_EQ(a.labels.size(), b.labels.size());
+      std::size_t differ = 0, obstacles = 0;
+      for (std::size_t i = 0; i < a.labels.size(); ++i) {
+        differ += a.labels[i] != b.labels[i] || a.p_obstacle[i] != b.p_obstacle[i];
+        obstacles += a.labels[i] == kLabelObstacle;
+      }
+      EXPECT_EQ(differ, 0u) << name << " scan " << k;
+      EXPECT_GT(obstacles, 100u) << name;
+    }
+  }
 }
