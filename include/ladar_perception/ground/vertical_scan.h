@@ -323,6 +323,7 @@ class VerticalScanGround : public GroundModel {
   // cell, so the image is never cleared), the tangent of the angle to the next row up per
   // row, and the returns to relabel.
   ScratchBuffer<uint32_t> cell_;
+  int cell_row_shift_ = 0;  // cell = row << cell_row_shift_ | sub-column
   std::vector<uint32_t> range_image_;
   // One byte per range-image cell (and one before and after): the cells next to an obstacle
   // or above a deep return carry this scan's stamp, so only their ground returns are tested.

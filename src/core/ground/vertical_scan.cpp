@@ -10,8 +10,23 @@
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
+#if defined(__x86_64__)
+#include <immintrin.h>  // the AVX2 median (target attribute; called only on an AVX2 CPU)
+#endif
 
 #include "ladar_perception/cloud/laser_elevations.h"
+
+// The per-point and per-bin functions are compiled twice, for the x86-64 baseline (SSE2) and
+// for AVX2, and the loader picks the AVX2 clone on a CPU that has it (GCC function
+// multiversioning, an ifunc per function). The source is the same: the SSE2 intrinsics get
+// the three-operand VEX encoding (no register copies) and the compiler may vectorise scalar
+// loops 8 wide. AVX2 does not include FMA, so no multiply-add is fused and both clones compute
+// the same floats (the labels and P(obstacle) are bit-identical; see DEVELOPERS.md).
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && !defined(LADAR_NO_CLONES)
+#define LADAR_HOT_PATH __attribute__((target_clones("arch=x86-64-v3", "default")))
+#else
+#define LADAR_HOT_PATH
+#endif
 
 namespace ladar_perception {
 
@@ -83,7 +98,7 @@ inline int lowerMedianPositionByRank(const float* r, int n) {
 // that value has rank mid. When no position has exactly mid smaller entries, a run of equal
 // values straddles the median: the exact rank test decides.
 template <int NV>
-inline int lowerMedianPositionSse(const float* r, int n) {
+inline LADAR_ALWAYS_INLINE int lowerMedianPositionSse(const float* r, int n) {
   const int mid = (n - 1) / 2;
   __m128 v[NV];
   __m128i less[NV];
@@ -113,8 +128,60 @@ inline int lowerMedianPositionSse(const float* r, int n) {
 }
 #endif
 
-inline int lowerMedianPosition(const float* r, int n) {
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && !defined(LADAR_NO_CLONES)
+#define LADAR_MEDIAN_AVX2 1
+// lowerMedianPositionSse with 8 lanes (NV = ceil(n / 8) vectors): the same counts, half the
+// comparisons. Called only where the CPU has AVX2 (the AVX2 clone of fitColumns()).
+template <int NV>
+__attribute__((target("avx2"))) inline int lowerMedianPositionAvx2(const float* r, int n) {
+  const int mid = (n - 1) / 2;
+  __m256 v[NV];
+  __m256i less[NV];
+  for (int k = 0; k < NV; ++k) {
+    v[k] = _mm256_loadu_ps(r + 8 * k);
+    less[k] = _mm256_setzero_si256();
+  }
+  for (int q = 0; q < n; ++q) {
+    const __m256 rq = _mm256_set1_ps(r[q]);
+    for (int k = 0; k < NV; ++k) {
+      less[k] = _mm256_sub_epi32(less[k], _mm256_castps_si256(_mm256_cmp_ps(rq, v[k], _CMP_LT_OQ)));
+    }
+  }
+  const __m256i v_mid = _mm256_set1_epi32(mid);
+  unsigned at_mid = 0;
+  for (int k = 0; k < NV; ++k) {
+    at_mid |= static_cast<unsigned>(_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(less[k], v_mid))))
+              << (8 * k);
+  }
+  const unsigned in_bin = n >= 32 ? ~0u : (1u << n) - 1u;
+  at_mid &= in_bin;
+  if (at_mid == 0) return lowerMedianPositionByRank(r, n);
+  const __m256 value = _mm256_set1_ps(r[__builtin_ctz(at_mid)]);
+  unsigned equal = 0;
+  for (int k = 0; k < NV; ++k) {
+    equal |= static_cast<unsigned>(_mm256_movemask_ps(_mm256_cmp_ps(v[k], value, _CMP_EQ_OQ))) << (8 * k);
+  }
+  return __builtin_ctz(equal & in_bin);
+}
+
+bool cpuHasAvx2() {
+  __builtin_cpu_init();
+  return __builtin_cpu_supports("avx2");
+}
+const bool kCpuHasAvx2 = cpuHasAvx2();
+#endif
+
+// Inlined into each clone of fitColumns() (compiled for its target).
+inline LADAR_ALWAYS_INLINE int lowerMedianPosition(const float* r, int n) {
   if (n <= 2) return n == 2 && r[1] < r[0] ? 1 : 0;
+#if defined(LADAR_MEDIAN_AVX2)
+  if (kCpuHasAvx2) {
+    if (n <= 8) return lowerMedianPositionAvx2<1>(r, n);
+    if (n <= 16) return lowerMedianPositionAvx2<2>(r, n);
+    if (n <= 24) return lowerMedianPositionAvx2<3>(r, n);
+    return lowerMedianPositionAvx2<4>(r, n);
+  }
+#endif
 #if defined(__SSE2__)
   if (n <= 4) return lowerMedianPositionSse<1>(r, n);
   if (n <= 8) return lowerMedianPositionSse<2>(r, n);
@@ -276,7 +343,7 @@ void ElevationRowTable::build(const std::vector<float>& elevations_deg) {
 
 namespace vertical_scan {
 
-float estimateSlope(const float* r, const float* height, int n, const VerticalScanParams& p,
+LADAR_HOT_PATH float estimateSlope(const float* r, const float* height, int n, const VerticalScanParams& p,
                     float seed, float* weights, int* support) {
   // Eq 3.4 (feasibility) and the mean height of the feasible returns for eq 3.5.
   float sum_h = 0.f;
@@ -336,7 +403,7 @@ float estimateSlope(const float* r, const float* height, int n, const VerticalSc
   return estimate;
 }
 
-int trackGroundLine(const float* r, const float* height, int n, const VerticalScanParams& p,
+LADAR_HOT_PATH int trackGroundLine(const float* r, const float* height, int n, const VerticalScanParams& p,
                     float slope0, int knots, float* knot_height, float* knot_support,
                     float* scratch) {
   float* gr = scratch;           // accepted ground returns, starting with the sensor's
@@ -531,9 +598,13 @@ void VerticalScanGround::setParams(const VerticalScanParams& params) {
   if (p.neighbour_cells_per_column > 64) p.neighbour_cells_per_column = 64;
   if (p.laser_neighbours) {
     // Sized for the largest bin grid (kMaxRingRows rows); filled once, never cleared.
-    range_image_.assign(static_cast<std::size_t>(columns_) * p.neighbour_cells_per_column * kMaxRingRows,
-                        0xFFFFFFFFu);
-    cell_mark_.assign(range_image_.size() + 2, 0);
+    // Row-major (cell = row << cell_row_shift_ | sub-column): a laser's sweep writes and
+    // reads consecutive cells, and so does a firing of all lasers at one azimuth, row by row.
+    cell_row_shift_ = 0;
+    while ((1 << cell_row_shift_) < columns_ * p.neighbour_cells_per_column) ++cell_row_shift_;
+    range_image_.assign(static_cast<std::size_t>(kMaxRingRows) << cell_row_shift_, 0xFFFFFFFFu);
+    // A row of padding before and after: the marks of the rows below row 0 and above the top.
+    cell_mark_.assign(range_image_.size() + (std::size_t{2} << cell_row_shift_), 0);
     mark_stamp_ = 0;
     // The angle from each row to the next one up, from the laser table (0.4 degrees beyond it).
     std::vector<float> el = p.laser_elevations_deg.empty() ? hdl64eElevationsDeg() : p.laser_elevations_deg;
@@ -575,7 +646,7 @@ float VerticalScanGround::groundHeight(int col, float r) const {
 }
 
 template <bool kRing, bool kTilted, bool kFastXYZ, bool kSubColumns>
-void VerticalScanGround::binPoints(const PointCloudView& view, const SensorPose& pose,
+LADAR_HOT_PATH void VerticalScanGround::binPoints(const PointCloudView& view, const SensorPose& pose,
                                    GroundClassification* out) {
   const std::size_t n = view.size();
   const float min_r2 = params_.min_range * params_.min_range;
@@ -638,6 +709,7 @@ void VerticalScanGround::binPoints(const PointCloudView& view, const SensorPose&
     const __m128 v_sign_bit = _mm_castsi128_ps(_mm_set1_epi32(static_cast<int>(0x80000000u)));
     const __m128 v_cells_per_column = _mm_set1_ps(cells_per_column), v_last_sub = _mm_set1_ps(last_sub);
     const __m128i v_no_cell = _mm_set1_epi32(-1);
+    const __m128i v_cell_row_shift = _mm_cvtsi32_si128(cell_row_shift_);
     for (; i + 4 <= n; i += 4) {
       const uint8_t* pt = src + i * step;
       __m128 X = _mm_loadu_ps(reinterpret_cast<const float*>(pt));
@@ -712,7 +784,7 @@ void VerticalScanGround::binPoints(const PointCloudView& view, const SensorPose&
         // The sub-column as the scalar loop computes it: trunc(min(x, L)) = min(trunc(x), L)
         // for an integer L.
         const __m128i sub = _mm_cvttps_epi32(_mm_min_ps(_mm_mul_ps(a, v_cells_per_column), v_last_sub));
-        const __m128i c = _mm_or_si128(_mm_sll_epi32(sub, v_shift), row);
+        const __m128i c = _mm_or_si128(_mm_sll_epi32(row, v_cell_row_shift), sub);
         alignas(16) uint32_t c4[4];
         _mm_store_si128(reinterpret_cast<__m128i*>(c4), c);
         _mm_storeu_si128(reinterpret_cast<__m128i*>(cell + i),
@@ -801,7 +873,7 @@ void VerticalScanGround::binPoints(const PointCloudView& view, const SensorPose&
     if (kSubColumns) {
       float sub = a * cells_per_column;
       sub = sub < last_sub ? sub : last_sub;
-      const uint32_t c = static_cast<uint32_t>(static_cast<int>(sub)) << shift | static_cast<uint32_t>(row);
+      const uint32_t c = static_cast<uint32_t>(row) << cell_row_shift_ | static_cast<uint32_t>(static_cast<int>(sub));
       cell[i] = c;
       image[c] = static_cast<uint32_t>(i);
     }
@@ -971,7 +1043,7 @@ void VerticalScanGround::classify(const PointCloudView& view, const SensorPose& 
   if (sub) labelFromLaserNeighbours(pose.sensor_to_ground.translation().z(), out);
 }
 
-void VerticalScanGround::fitColumns() {
+LADAR_HOT_PATH void VerticalScanGround::fitColumns() {
   const VerticalScanParams& p = params_;
   const int rows = rows_;
   col_r_.resize(static_cast<std::size_t>(columns_) * rows);
@@ -1152,7 +1224,7 @@ void VerticalScanGround::fitColumns() {
   }
 }
 
-void VerticalScanGround::labelPoints(GroundClassification* out) {
+LADAR_HOT_PATH void VerticalScanGround::labelPoints(GroundClassification* out) {
   const VerticalScanParams& p = params_;
   const ObstacleToleranceParams& tol = p.tolerances;
   const std::size_t n = bin_.size();
@@ -1482,7 +1554,7 @@ void VerticalScanGround::labelPoints(GroundClassification* out) {
   }
 }
 
-void VerticalScanGround::labelFromLaserNeighbours(float sensor_height, GroundClassification* out) {
+LADAR_HOT_PATH void VerticalScanGround::labelFromLaserNeighbours(float sensor_height, GroundClassification* out) {
   const VerticalScanParams& p = params_;
   const ObstacleToleranceParams& tol = p.tolerances;
   const std::size_t n = bin_.size();
@@ -1560,21 +1632,24 @@ void VerticalScanGround::labelFromLaserNeighbours(float sensor_height, GroundCla
   const float max_dr = p.neighbour_max_dr;
   const float step = p.neighbour_min_step;
   const float above_threshold = std::nextafter(thr, 2.f);
-  // The neighbour in the row below (d = -1) or above (d = +1): its index, or n. An image entry
-  // is the cell's when that return's own cell is the cell (the image is never cleared).
+  // The neighbour in the row below (d = -row_step) or above (d = row_step): its index, or n.
+  // An image entry is the cell's when that return's own cell is the cell (the image is never
+  // cleared).
+  const int cell_shift = cell_row_shift_;
+  const uint32_t row_step = 1u << cell_shift;
   auto neighbour = [&](uint32_t c, uint32_t d) -> std::size_t {
     const uint32_t cn = c + d;
     const uint32_t j = image[cn];
     return j < n && cell[j] == cn ? j : n;
   };
   neighbour_obstacles_.clear();
-  auto face_or_wall = [&](std::size_t i) {
+  auto face_or_wall = [&](std::size_t i) LADAR_ALWAYS_INLINE {
     const uint32_t c = cell[i];
-    const uint32_t row = c & (rows - 1);
+    const uint32_t row = c >> cell_shift;
     const float r = rr[i], h = hh[i];
     float p_face = -1.f;
     if (row > 0) {
-      const std::size_t j = neighbour(c, 0xFFFFFFFFu);
+      const std::size_t j = neighbour(c, 0u - row_step);
       if (j < n) {
         const float dr = std::fabs(r - rr[j]);
         if (labels[j] == kLabelObstacle && h >= hh[j] + step &&
@@ -1587,7 +1662,7 @@ void VerticalScanGround::labelFromLaserNeighbours(float sensor_height, GroundCla
       }
     }
     if (row + 1 < rows) {
-      const std::size_t j = neighbour(c, 1u);
+      const std::size_t j = neighbour(c, row_step);
       if (j < n && labels[j] == kLabelObstacle && hh[j] >= h + step &&
           std::fabs(r - rr[j]) < std::min(max_dr, gap_per_r2[row] * r * r) && prob[j] > p_face) {
         p_face = prob[j];  // the foot of a face
@@ -1604,7 +1679,11 @@ void VerticalScanGround::labelFromLaserNeighbours(float sensor_height, GroundCla
   static_assert(kLabelGround == 0, "the ground scan assumes ground = 0");
   const bool marked = deep_listed_;
   uint8_t stamp = 0;
-  uint8_t* const mark = cell_mark_.data() + 1;  // mark[-1 .. cells]
+  // A row of padding each side: mark_below[c] and mark_above[c] are the marks of the cells in
+  // the rows below and above cell c.
+  uint8_t* const mark_below = cell_mark_.data();
+  uint8_t* const mark = mark_below + row_step;
+  uint8_t* const mark_above = mark + row_step;
   if (marked) {
     if (++mark_stamp_ == 0) {  // a wrap: forget the stamps of 255 scans ago
       std::fill(cell_mark_.begin(), cell_mark_.end(), 0);
@@ -1613,8 +1692,8 @@ void VerticalScanGround::labelFromLaserNeighbours(float sensor_height, GroundCla
     stamp = mark_stamp_;
     auto mark_around = [&](std::size_t j) {
       const uint32_t c = cell[j];
-      mark[static_cast<int64_t>(c) - 1] = stamp;
-      mark[c + 1] = stamp;
+      mark_below[c] = stamp;
+      mark_above[c] = stamp;
     };
     std::size_t j = 0;
 #if defined(__SSE2__)
@@ -1633,28 +1712,33 @@ void VerticalScanGround::labelFromLaserNeighbours(float sensor_height, GroundCla
     for (std::size_t g = 0; g < deep_count_; ++g) {
       const std::size_t group = static_cast<std::size_t>(groups[g] >> 4) * 4;
       for (unsigned lanes = groups[g] & 15u; lanes; lanes &= lanes - 1) {
-        mark[cell[group + static_cast<std::size_t>(__builtin_ctz(lanes))] + 1] = stamp;
+        mark_above[cell[group + static_cast<std::size_t>(__builtin_ctz(lanes))]] = stamp;
       }
     }
     for (std::size_t q = below_line_from_; q < n; ++q) {  // past the listing loop
-      if (bins[q] != unknown_bin_) mark[cell[q] + 1] = stamp;
+      if (bins[q] != unknown_bin_) mark_above[cell[q]] = stamp;
     }
   }
-  auto test = [&](std::size_t i) {
-    if (!marked || mark[cell[i]] == stamp) face_or_wall(i);
-  };
   std::size_t i = 0;
+  if (marked) {
 #if defined(__SSE2__)
-  for (; i + 16 <= n; i += 16) {
-    const __m128i l16 = _mm_loadu_si128(reinterpret_cast<const __m128i*>(labels + i));
-    for (unsigned ground = static_cast<unsigned>(_mm_movemask_epi8(_mm_cmpeq_epi8(l16, _mm_setzero_si128())));
-         ground; ground &= ground - 1) {
-      test(i + static_cast<std::size_t>(__builtin_ctz(ground)));
+    for (; i + 16 <= n; i += 16) {
+      const __m128i l16 = _mm_loadu_si128(reinterpret_cast<const __m128i*>(labels + i));
+      unsigned ground = static_cast<unsigned>(_mm_movemask_epi8(_mm_cmpeq_epi8(l16, _mm_setzero_si128())));
+      while (ground) {
+        const std::size_t q = i + static_cast<std::size_t>(__builtin_ctz(ground));
+        ground &= ground - 1;
+        if (mark[cell[q]] == stamp) face_or_wall(q);
+      }
     }
-  }
 #endif
-  for (; i < n; ++i) {
-    if (labels[i] == kLabelGround) test(i);
+    for (; i < n; ++i) {
+      if (labels[i] == kLabelGround && mark[cell[i]] == stamp) face_or_wall(i);
+    }
+  } else {
+    for (; i < n; ++i) {
+      if (labels[i] == kLabelGround) face_or_wall(i);
+    }
   }
   // Applied after the pass: a relabelled return does not make its own neighbours obstacles.
   for (const auto& o : neighbour_obstacles_) {
