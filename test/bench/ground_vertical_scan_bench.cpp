@@ -6,10 +6,10 @@
 // Instruction count of one call (callgrind):
 //   valgrind --tool=callgrind --instr-atstart=no ground_vertical_scan_bench --callgrind-once FILE.bin
 // loads the file, warms nothing, and instruments exactly one classify call (--thesis: the thesis
-// mode; --neighbours: the default with laser_neighbours; --warm: after one uninstrumented call,
+// mode; --bins: the default without laser_neighbours; --warm: after one uninstrumented call,
 // as in a running stream).
 // Output of one call for comparisons between builds:
-//   ground_vertical_scan_bench --dump FILE.bin OUT [--thesis|--neighbours]   (n label bytes, n floats)
+//   ground_vertical_scan_bench --dump FILE.bin OUT [--thesis|--bins]   (n label bytes, n floats)
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -28,12 +28,12 @@ using namespace ladar_perception;
 
 namespace {
 
-enum class Mode { kDefault, kThesis, kNeighbours };
+enum class Mode { kDefault, kThesis, kBins };
 
 VerticalScanParams paramsOf(Mode mode) {
   switch (mode) {
     case Mode::kThesis: return verticalScanThesisParams();
-    case Mode::kNeighbours: return verticalScanNeighboursParams();
+    case Mode::kBins: return verticalScanBinsParams();
     default: return verticalScanDefaultParams();
   }
 }
@@ -42,7 +42,7 @@ Mode modeOf(int argc, char** argv, int from) {
   Mode mode = Mode::kDefault;
   for (int a = from; a < argc; ++a) {
     if (std::strcmp(argv[a], "--thesis") == 0) mode = Mode::kThesis;
-    if (std::strcmp(argv[a], "--neighbours") == 0) mode = Mode::kNeighbours;
+    if (std::strcmp(argv[a], "--bins") == 0) mode = Mode::kBins;
   }
   return mode;
 }
@@ -166,8 +166,8 @@ int main(int argc, char** argv) {
   benchmark::RegisterBenchmark("VerticalScanThesis/kitti/000000.bin",
                                [](benchmark::State& s) { BM_Kitti(s, "000000.bin", Mode::kThesis); })
       ->Unit(benchmark::kMillisecond);
-  benchmark::RegisterBenchmark("VerticalScanNeighbours/kitti/000000.bin",
-                               [](benchmark::State& s) { BM_Kitti(s, "000000.bin", Mode::kNeighbours); })
+  benchmark::RegisterBenchmark("VerticalScanBins/kitti/000000.bin",
+                               [](benchmark::State& s) { BM_Kitti(s, "000000.bin", Mode::kBins); })
       ->Unit(benchmark::kMillisecond);
   benchmark::RegisterBenchmark("VerticalScan/simulated_urban",
                                [](benchmark::State& s) { BM_SimulatedUrban(s, Mode::kDefault); })
@@ -175,8 +175,8 @@ int main(int argc, char** argv) {
   benchmark::RegisterBenchmark("VerticalScanThesis/simulated_urban",
                                [](benchmark::State& s) { BM_SimulatedUrban(s, Mode::kThesis); })
       ->Unit(benchmark::kMillisecond);
-  benchmark::RegisterBenchmark("VerticalScanNeighbours/simulated_urban",
-                               [](benchmark::State& s) { BM_SimulatedUrban(s, Mode::kNeighbours); })
+  benchmark::RegisterBenchmark("VerticalScanBins/simulated_urban",
+                               [](benchmark::State& s) { BM_SimulatedUrban(s, Mode::kBins); })
       ->Unit(benchmark::kMillisecond);
   benchmark::Initialize(&argc, argv);
   benchmark::RunSpecifiedBenchmarks();

@@ -709,18 +709,24 @@ void scoreCurbRing(float curb_r, double* face_recall, double* ground_recall) {
 }
 
 TEST(VerticalScanModel, FootOfACurbFaceIsAnObstacle) {
+  // The bin-level foot term, without laser_neighbours (which finds these feet as well).
   const CurbRingScan s;
-  VerticalScanParams off = verticalScanDefaultParams();
+  VerticalScanParams off = verticalScanBinsParams();
   off.vertical_foot_slope = 0.f;
   double face_off = 0, ground_off = 0, face_on = 0, ground_on = 0;
   scoreCurbRing(s, off, &face_off, &ground_off);
-  scoreCurbRing(s, verticalScanDefaultParams(), &face_on, &ground_on);
+  scoreCurbRing(s, verticalScanBinsParams(), &face_on, &ground_on);
   // Measured: face recall 0.50 without the term (the upper face return of each column), 1.00
   // with it; ground recall 1.00 either way.
   EXPECT_GT(face_on, 0.95) << "without the foot term: " << face_off;
   EXPECT_GT(face_on, face_off + 0.3);
   EXPECT_GT(ground_on, 0.99);
   EXPECT_GE(ground_on, ground_off - 0.002);
+  // The default, with laser_neighbours.
+  double face_default = 0, ground_default = 0;
+  scoreCurbRing(s, verticalScanDefaultParams(), &face_default, &ground_default);
+  EXPECT_GT(face_default, 0.95);
+  EXPECT_GT(ground_default, 0.99);
 }
 
 TEST(VerticalScanModel, FootOfACurbFaceBehindAKnot) {

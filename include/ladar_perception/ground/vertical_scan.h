@@ -111,10 +111,10 @@ struct VerticalScanParams {
 };
 
 // Settings by name: "thesis" (the thesis's method and settings), "default" (beyond it), and
-// "neighbours" (the default with laser_neighbours on).
+// "bins" (the default without laser_neighbours: the context of the bins alone, cheaper).
 VerticalScanParams verticalScanThesisParams();
 VerticalScanParams verticalScanDefaultParams();
-VerticalScanParams verticalScanNeighboursParams();
+VerticalScanParams verticalScanBinsParams();
 
 // Sets one scalar parameter by its field name ("weight_bias", "tolerances.gnd_error_max_base",
 // "bend_ground_line" (0/1), ...): the tools' --set key=value. False with a reason for an unknown

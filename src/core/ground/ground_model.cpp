@@ -10,7 +10,7 @@ namespace ladar_perception {
 
 std::vector<std::string> groundModelNames() {
   // The default first.
-  return {"vertical_scan", "vertical_scan_thesis", "vertical_scan_neighbours", "hough", "plane", "analog_signal"};
+  return {"vertical_scan", "vertical_scan_thesis", "vertical_scan_bins", "hough", "plane", "analog_signal"};
 }
 
 std::unique_ptr<GroundModel> makeGroundModel(const std::string& name, std::string* error) {
@@ -21,8 +21,8 @@ std::unique_ptr<GroundModel> makeGroundModel(const std::string& name, std::strin
     return std::make_unique<VerticalScanGround>(verticalScanThesisParams(),
                                                 "vertical_scan_thesis");
   }
-  if (name == "vertical_scan_neighbours" || name == "neighbours") {
-    return std::make_unique<VerticalScanGround>(verticalScanNeighboursParams(), "vertical_scan_neighbours");
+  if (name == "vertical_scan_bins" || name == "bins") {
+    return std::make_unique<VerticalScanGround>(verticalScanBinsParams(), "vertical_scan_bins");
   }
   // The Hough ground fit (3.3.4) on each azimuth column of a 3D cloud as one vertical scan.
   if (name == "hough") return makeHoughColumnsModel();

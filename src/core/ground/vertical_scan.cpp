@@ -291,12 +291,18 @@ VerticalScanParams verticalScanDefaultParams() {
   // 95.6 -> 97.1 %; rural 94.2 -> 95.7 %; ground recall within 0.03 %; 0.5 finds more but
   // costs rural ground recall 1.9 %).
   p.vertical_foot_slope = 1.0f;
+  // Each return's neighbours in the rows above and below (feet and tops of faces, far walls of
+  // holes, negative obstacles from the foot of a step). 10 scans, seed 1: urban 97.84 / 99.12 /
+  // 97.13 % -> 99.21 / 99.20 / 98.96 %, hillside obstacle recall 97.96 -> 99.34 %, rural 99.69 /
+  // 99.10 / 97.61 % -> 99.92 / 99.37 / 99.38 %, potholes 66.15 -> 77.23 %; seeds 2 and 3 alike.
+  // The default since session 11 brought it to 17.7 M instructions per KITTI scan.
+  p.laser_neighbours = true;
   return p;
 }
 
-VerticalScanParams verticalScanNeighboursParams() {
+VerticalScanParams verticalScanBinsParams() {
   VerticalScanParams p = verticalScanDefaultParams();
-  p.laser_neighbours = true;
+  p.laser_neighbours = false;
   return p;
 }
 
@@ -785,19 +791,19 @@ LADAR_HOT_PATH void VerticalScanGround::binPoints(const PointCloudView& view, co
         // for an integer L.
         const __m128i sub = _mm_cvttps_epi32(_mm_min_ps(_mm_mul_ps(a, v_cells_per_column), v_last_sub));
         const __m128i c = _mm_or_si128(_mm_sll_epi32(row, v_cell_row_shift), sub);
-        alignas(16) uint32_t c4[4];
-        _mm_store_si128(reinterpret_cast<__m128i*>(c4), c);
-        _mm_storeu_si128(reinterpret_cast<__m128i*>(cell + i),
-                         _mm_or_si128(_mm_and_si128(valid_i, c), _mm_andnot_si128(valid_i, v_no_cell)));
         const uint32_t i0 = static_cast<uint32_t>(i);
         if (valid_bits == 0xF) {
-          image[c4[0]] = i0;
-          image[c4[1]] = i0 + 1;
-          image[c4[2]] = i0 + 2;
-          image[c4[3]] = i0 + 3;
+          _mm_storeu_si128(reinterpret_cast<__m128i*>(cell + i), c);
+          // The lanes from registers (a store and four loads of it would wait on forwarding).
+          image[static_cast<uint32_t>(_mm_cvtsi128_si32(c))] = i0;
+          image[static_cast<uint32_t>(_mm_cvtsi128_si32(_mm_shuffle_epi32(c, 0x55)))] = i0 + 1;
+          image[static_cast<uint32_t>(_mm_cvtsi128_si32(_mm_shuffle_epi32(c, 0xAA)))] = i0 + 2;
+          image[static_cast<uint32_t>(_mm_cvtsi128_si32(_mm_shuffle_epi32(c, 0xFF)))] = i0 + 3;
         } else {
+          _mm_storeu_si128(reinterpret_cast<__m128i*>(cell + i),
+                           _mm_or_si128(_mm_and_si128(valid_i, c), _mm_andnot_si128(valid_i, v_no_cell)));
           for (int l = 0; l < 4; ++l) {
-            if (valid_bits >> l & 1) image[c4[l]] = i0 + static_cast<uint32_t>(l);
+            if (valid_bits >> l & 1) image[cell[i + l]] = i0 + static_cast<uint32_t>(l);
           }
         }
       }
@@ -1632,6 +1638,9 @@ LADAR_HOT_PATH void VerticalScanGround::labelFromLaserNeighbours(float sensor_he
   const float max_dr = p.neighbour_max_dr;
   const float step = p.neighbour_min_step;
   const float above_threshold = std::nextafter(thr, 2.f);
+  // A relabelled return's P(obstacle) is its neighbour's, raised above the threshold: with a
+  // threshold of 1 or more no P can be above it, and no return is an obstacle.
+  if (above_threshold > 1.f) return;
   // The neighbour in the row below (d = -row_step) or above (d = row_step): its index, or n.
   // An image entry is the cell's when that return's own cell is the cell (the image is never
   // cleared).
