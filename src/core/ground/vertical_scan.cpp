@@ -671,7 +671,7 @@ LADAR_HOT_PATH void VerticalScanGround::binPoints(const PointCloudView& view, co
   uint32_t* __restrict bins = bin_.data();
   float* __restrict rr = r_.data();
   float* __restrict hh = height_.data();
-  // laser_neighbours: each return's range-image cell (sub-column << row_shift_ | row, or
+  // laser_neighbours: each return's range-image cell (row << cell_row_shift_ | sub-column, or
   // kNoCell), and the image entry of that cell (the last return in it, in input order).
   uint32_t* __restrict cell = kSubColumns ? cell_.data() : nullptr;
   uint32_t* __restrict image = kSubColumns ? range_image_.data() : nullptr;
