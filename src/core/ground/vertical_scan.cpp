@@ -17,12 +17,14 @@
 #include "ladar_perception/cloud/laser_elevations.h"
 
 // The per-point and per-bin functions are compiled twice, for the x86-64 baseline (SSE2) and
-// for AVX2, and the loader picks the AVX2 clone on a CPU that has it (GCC function
+// for x86-64-v3 (AVX2), and the loader picks the second on a CPU that has it (GCC function
 // multiversioning, an ifunc per function). The source is the same: the SSE2 intrinsics get
 // the three-operand VEX encoding (no register copies) and the compiler may vectorise scalar
-// loops 8 wide. AVX2 does not include FMA, so no multiply-add is fused and both clones compute
-// the same floats (the labels and P(obstacle) are bit-identical; see DEVELOPERS.md).
+// loops 8 wide. x86-64-v3 has FMA: CMakeLists.txt compiles this file with -ffp-contract=off,
+// so no multiply-add is fused and both clones compute the same floats (the labels and
+// P(obstacle) are bit-identical; see DEVELOPERS.md).
 #if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && !defined(LADAR_NO_CLONES)
+#define LADAR_CLONES 1
 #define LADAR_HOT_PATH __attribute__((target_clones("arch=x86-64-v3", "default")))
 #else
 #define LADAR_HOT_PATH
@@ -128,8 +130,7 @@ inline LADAR_ALWAYS_INLINE int lowerMedianPositionSse(const float* r, int n) {
 }
 #endif
 
-#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && !defined(LADAR_NO_CLONES)
-#define LADAR_MEDIAN_AVX2 1
+#if defined(LADAR_CLONES)
 // lowerMedianPositionSse with 8 lanes (NV = ceil(n / 8) vectors): the same counts, half the
 // comparisons. Called only where the CPU has AVX2 (the AVX2 clone of fitColumns()).
 template <int NV>
@@ -174,7 +175,7 @@ const bool kCpuHasAvx2 = cpuHasAvx2();
 // Inlined into each clone of fitColumns() (compiled for its target).
 inline LADAR_ALWAYS_INLINE int lowerMedianPosition(const float* r, int n) {
   if (n <= 2) return n == 2 && r[1] < r[0] ? 1 : 0;
-#if defined(LADAR_MEDIAN_AVX2)
+#if defined(LADAR_CLONES)
   if (kCpuHasAvx2) {
     if (n <= 8) return lowerMedianPositionAvx2<1>(r, n);
     if (n <= 16) return lowerMedianPositionAvx2<2>(r, n);
