@@ -3,7 +3,7 @@
 //
 //   ground_eval [--worlds flat,urban,rural,hillside,potholes] [--method NAME[,NAME]]
 //               [--noise datasheet|table4.1|none] [--scans N] [--seed S] [--classes]
-//               [--sick-scans N] [--at-ground-band M] [--markdown OUT]
+//               [--sick-scans N] [--at-ground-band M] [--height-bound] [--markdown OUT]
 // By default every ground model (HDL-64E revolutions) on every standard world, then the vertical
 // SICK's ground fits (the Hough fit of 3.3.4 against the 1-DOF vertical scan line), with the
 // median core time per scan; then the thesis's findings checked against the table (those whose
@@ -12,6 +12,9 @@
 // not; on the undulating hillside the Hough fit beats the 1-DOF line on the vertical SICK.
 // --at-ground-band M (e.g. 0.02): obstacle returns within M in height of a ground surface
 // less than 0.3 m away are not scored (ground_evaluation.h); the HDL-64E rows only.
+// --height-bound adds, per world, the obstacle recall that a test of each return's height
+// against the exact ground surface reaches while keeping 99% of the ground (heightTestBound in
+// ground_evaluation.h): what height alone can separate at this noise, for any ground model.
 // --markdown also writes the table and the findings to OUT (for the README). Exit status 3 when a
 // finding checked is not reproduced (1: an evaluation failed, 2: bad arguments).
 #include <cstdarg>
@@ -97,6 +100,7 @@ int main(int argc, char** argv) {
   uint32_t seed = 1;
   bool per_class = false;
   double at_ground_band = 0.0;
+  bool height_bound = false;
   std::vector<std::string> sets;
   std::string png_prefix;  // PREFIX_<world>.png: the middle scan's errors, top-down  // key=value overrides of the vertical scan params
   std::string cmdline = "ground_eval";
@@ -117,6 +121,7 @@ int main(int argc, char** argv) {
     else if (a == "--png-errors") png_prefix = next();
     else if (a == "--sick-scans") sick_scans = std::atoi(next().c_str());
     else if (a == "--at-ground-band") at_ground_band = std::atof(next().c_str());
+    else if (a == "--height-bound") height_bound = true;
     else if (a == "--markdown") markdown_path = next();
     else {
       const bool help = a == "-h" || a == "--help";
@@ -124,7 +129,8 @@ int main(int argc, char** argv) {
       if (!help) out << "ground_eval: unknown argument " << a << "\n";
       out << "usage: ground_eval [--worlds a,b] [--method m1,m2] "
              "[--noise datasheet|table4.1|none] [--scans N] [--seed S] [--classes] [--set key=value]... "
-             "[--png-errors PREFIX] [--sick-scans N] [--at-ground-band M] [--markdown OUT]\n  worlds (default all):";
+             "[--png-errors PREFIX] [--sick-scans N] [--at-ground-band M] [--height-bound] [--markdown OUT]\n"
+             "  worlds (default all):";
       for (const std::string& w : sim::standardWorldNames()) out << " " << w;
       out << "\n  methods (default all):";
       for (const std::string& m : groundModelNames()) out << " " << m;
@@ -302,6 +308,42 @@ int main(int argc, char** argv) {
          kFailPoints, kHoldPoints, reproduced, checked);
     for (const std::string& f : findings) emit("%s", f.c_str());
     if (reproduced < checked && status == 0) status = 3;
+  }
+  if (height_bound) {
+    constexpr double kGroundKept = 0.99;  // the ground recall target
+    emit("\nObstacle recall reachable by height alone (a test of each return's height against the exact "
+         "ground surface within %.1f m, keeping %.0f%% of the ground returns in each range band):\n\n"
+         "| world | obstacle returns | separable by height |",
+         kAtGroundRadius, 100.0 * kGroundKept);
+    for (int c = 0; c < sim::kNumSurfaceClasses; ++c) {
+      if (sim::isObstacleClass(static_cast<sim::SurfaceClass>(c)))
+        emit(" %s |", sim::className(static_cast<sim::SurfaceClass>(c)));
+    }
+    emit("\n|---|---|---|");
+    for (int c = 0; c < sim::kNumSurfaceClasses; ++c)
+      if (sim::isObstacleClass(static_cast<sim::SurfaceClass>(c))) emit("---|");
+    emit("\n");
+    for (const std::string& w : worlds) {
+      HeightTestBound bound;
+      std::string error;
+      if (!heightTestBound(w, noise, scans, seed, kGroundKept, &bound, &error)) {
+        std::cerr << "ground_eval: " << w << ": " << error << "\n";
+        status = 1;
+        continue;
+      }
+      emit("| %s | %zu | %.2f%% |", w.c_str(), bound.obstacle_returns, 100.0 * bound.recall());
+      for (int c = 0; c < sim::kNumSurfaceClasses; ++c) {
+        if (!sim::isObstacleClass(static_cast<sim::SurfaceClass>(c))) continue;
+        if (bound.class_returns[c]) {
+          emit(" %.1f%% of %zu |", 100.0 * GroundAccuracy::ratio(bound.class_separable[c], bound.class_returns[c]),
+               bound.class_returns[c]);
+        } else {
+          emit(" - |");
+        }
+      }
+      emit("\n");
+      std::fflush(stdout);
+    }
   }
   if (!markdown_path.empty()) {
     const std::string tmp = markdown_path + ".tmp";

@@ -13,9 +13,11 @@
 // 2 cm range noise no height test can tell from the ground next to them.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -82,6 +84,25 @@ inline Eigen::Isometry3d evaluationSensorMount() {
 
 constexpr double kAtGroundRadius = 0.3;  // [m]
 
+// The height of the point p (world frame) above or below the ground next to it: the smallest
+// |p.z - h| over the ground-class cells less than kAtGroundRadius away horizontally (infinity
+// where there is none).
+inline double heightToNearbyGround(const sim::World& world, const Eigen::Vector3d& p) {
+  const int R = static_cast<int>(std::ceil(kAtGroundRadius / world.resolution()));
+  const int cx = world.cellX(p.x()), cy = world.cellY(p.y());
+  double best = std::numeric_limits<double>::infinity();
+  for (int dy = -R; dy <= R; ++dy) {
+    for (int dx = -R; dx <= R; ++dx) {
+      const int ix = cx + dx, iy = cy + dy;
+      if (!world.validCell(ix, iy) || !sim::isGroundClass(world.cellClass(ix, iy))) continue;
+      if (static_cast<double>(dx * dx + dy * dy) * world.resolution() * world.resolution() >
+          kAtGroundRadius * kAtGroundRadius) continue;
+      best = std::min(best, std::abs(p.z() - world.cellHeight(ix, iy)));
+    }
+  }
+  return best;
+}
+
 // Marks the obstacle returns of `view` (truth: their classes; taken at `sensor` in the world)
 // that lie within `band` in height of a ground-class cell less than kAtGroundRadius away
 // horizontally.
@@ -89,57 +110,133 @@ inline void markObstacleReturnsAtTheGround(const sim::World& world, const Eigen:
                                            const PointCloudView& view, const std::vector<uint8_t>& truth,
                                            double band, std::vector<uint8_t>* at_ground) {
   at_ground->assign(truth.size(), 0);
-  const int R = static_cast<int>(std::ceil(kAtGroundRadius / world.resolution()));
   for (std::size_t i = 0; i < truth.size() && i < view.size(); ++i) {
     if (!sim::isObstacleClass(static_cast<sim::SurfaceClass>(truth[i]))) continue;
     const Eigen::Vector3d p = sensor * view.xyz(i).cast<double>();
     if (!std::isfinite(p.z())) continue;
-    const int cx = world.cellX(p.x()), cy = world.cellY(p.y());
-    bool near = false;
-    for (int dy = -R; dy <= R && !near; ++dy) {
-      for (int dx = -R; dx <= R && !near; ++dx) {
-        const int ix = cx + dx, iy = cy + dy;
-        if (!world.validCell(ix, iy) || !sim::isGroundClass(world.cellClass(ix, iy))) continue;
-        if (static_cast<double>(dx * dx + dy * dy) * world.resolution() * world.resolution() >
-            kAtGroundRadius * kAtGroundRadius) continue;
-        near = std::abs(p.z() - world.cellHeight(ix, iy)) < band;
-      }
-    }
-    (*at_ground)[i] = near;
+    (*at_ground)[i] = heightToNearbyGround(world, p) < band;
   }
 }
 
-// Classifies `scans` revolutions taken along the world's standard drive (evenly spaced in
-// time) and accumulates the accuracy. The model sees the sensor pose relative to base_link
-// (what tf gives the nodelet: base_link follows the local ground). at_ground_band > 0: the
-// obstacle returns at the ground are not scored (markObstacleReturnsAtTheGround).
-inline bool evaluateGroundModel(const std::string& world_name, GroundModel* model,
-                                sim::NoiseProfile noise, int scans, uint32_t seed,
-                                GroundAccuracy* acc, std::string* error,
-                                double at_ground_band = 0.0) {
+// The evaluation's scans: `scans` HDL-64E revolutions taken along the world's standard drive
+// (evenly spaced in time, noise seeds seed * 1000 + k). Calls
+// fn(world, sensor_in_world, view, truth) for each; false (and *error) when the world is
+// unknown or a scan cannot be read.
+template <typename ScanFn>
+bool forEachEvaluationScan(const std::string& world_name, sim::NoiseProfile noise, int scans,
+                           uint32_t seed, std::string* error, ScanFn fn) {
   sim::World world;
   if (!sim::makeStandardWorld(world_name, seed, &world, error)) return false;
   const sim::VelodyneModel velodyne = sim::VelodyneModel::hdl64e(noise);
   const Eigen::Isometry3d mount = evaluationSensorMount();
-  SensorPose pose;
-  pose.sensor_to_ground = mount.cast<float>();
   sim::SimulatedScan scan;
-  GroundClassification result;
   PointCloudView view;
-  std::vector<uint8_t> at_ground;
   const double duration = world.driveDuration();
   for (int k = 0; k < scans; ++k) {
     const double t = duration * (static_cast<double>(k) + 0.5) / std::max(scans, 1);
     const Eigen::Isometry3d sensor = world.drivePose(t) * mount;
     sim::simulateVelodyneRevolution(world, sensor, velodyne, seed * 1000u + k, &scan);
     if (!scan.cloud.view(&view, error)) return false;
-    model->classify(view, pose, &result);
-    if (at_ground_band > 0.0) {
-      markObstacleReturnsAtTheGround(world, sensor, view, scan.truth, at_ground_band, &at_ground);
-    } else {
-      at_ground.clear();
+    fn(static_cast<const sim::World&>(world), sensor, static_cast<const PointCloudView&>(view),
+       static_cast<const std::vector<uint8_t>&>(scan.truth));
+  }
+  return true;
+}
+
+// Classifies the evaluation's scans (forEachEvaluationScan) and accumulates the accuracy. The
+// model sees the sensor pose relative to base_link (what tf gives the nodelet: base_link
+// follows the local ground). at_ground_band > 0: the obstacle returns at the ground are not
+// scored (markObstacleReturnsAtTheGround).
+inline bool evaluateGroundModel(const std::string& world_name, GroundModel* model,
+                                sim::NoiseProfile noise, int scans, uint32_t seed,
+                                GroundAccuracy* acc, std::string* error,
+                                double at_ground_band = 0.0) {
+  SensorPose pose;
+  pose.sensor_to_ground = evaluationSensorMount().cast<float>();
+  GroundClassification result;
+  std::vector<uint8_t> at_ground;
+  return forEachEvaluationScan(
+      world_name, noise, scans, seed, error,
+      [&](const sim::World& world, const Eigen::Isometry3d& sensor, const PointCloudView& view,
+          const std::vector<uint8_t>& truth) {
+        model->classify(view, pose, &result);
+        if (at_ground_band > 0.0) {
+          markObstacleReturnsAtTheGround(world, sensor, view, truth, at_ground_band, &at_ground);
+        } else {
+          at_ground.clear();
+        }
+        acc->add(truth, result, at_ground);
+      });
+}
+
+// How far height alone can separate the obstacle returns from the ground on the evaluation's
+// scans: the limit of any test of a return's height, even against the exact ground surface
+// (which no estimate has). Each return's height difference to the ground next to it is
+// heightToNearbyGround(); per band of horizontal range from the sensor (the range noise
+// moves a return less in height the flatter the ray meets the ground), the threshold is the
+// difference that a fraction `ground_kept` (0.99: the ground recall target) of the ground
+// returns stay within; the obstacle returns beyond it are separable.
+struct HeightTestBound {
+  std::size_t obstacle_returns = 0, separable = 0;
+  std::array<std::size_t, sim::kNumSurfaceClasses> class_returns{}, class_separable{};
+  double recall() const { return GroundAccuracy::ratio(separable, obstacle_returns); }
+};
+
+inline bool heightTestBound(const std::string& world_name, sim::NoiseProfile noise, int scans,
+                            uint32_t seed, double ground_kept, HeightTestBound* out,
+                            std::string* error) {
+  static constexpr double kBandEdges[] = {5.0, 7.5, 10.0, 15.0, 20.0, 30.0, 50.0};  // [m]
+  constexpr int kBands = static_cast<int>(sizeof(kBandEdges) / sizeof(kBandEdges[0])) + 1;
+  auto band = [](double r) {
+    int b = 0;
+    while (b < kBands - 1 && r >= kBandEdges[b]) ++b;
+    return b;
+  };
+  std::array<std::vector<double>, kBands> ground_dz;
+  struct ObstacleReturn {
+    double dz;
+    int band;
+    uint8_t cls;
+  };
+  std::vector<ObstacleReturn> obstacles;
+  const bool ok = forEachEvaluationScan(
+      world_name, noise, scans, seed, error,
+      [&](const sim::World& world, const Eigen::Isometry3d& sensor, const PointCloudView& view,
+          const std::vector<uint8_t>& truth) {
+        for (std::size_t i = 0; i < truth.size() && i < view.size(); ++i) {
+          const auto c = static_cast<sim::SurfaceClass>(truth[i]);
+          const bool g = sim::isGroundClass(c), o = sim::isObstacleClass(c);
+          if (!g && !o) continue;
+          const Eigen::Vector3f q = view.xyz(i);
+          if (!q.allFinite()) continue;
+          const Eigen::Vector3d p = sensor * q.cast<double>();
+          const int b = band(std::hypot(p.x() - sensor.translation().x(), p.y() - sensor.translation().y()));
+          const double dz = heightToNearbyGround(world, p);
+          if (g) {
+            if (std::isfinite(dz)) ground_dz[b].push_back(dz);
+          } else {
+            obstacles.push_back({dz, b, truth[i]});
+          }
+        }
+      });
+  if (!ok) return false;
+  std::array<double, kBands> threshold{};
+  for (int b = 0; b < kBands; ++b) {
+    std::vector<double>& d = ground_dz[b];
+    if (d.empty()) continue;  // no ground in this band: every difference is separable
+    const std::size_t k = std::min(d.size() - 1, static_cast<std::size_t>(ground_kept * static_cast<double>(d.size())));
+    std::nth_element(d.begin(), d.begin() + static_cast<std::ptrdiff_t>(k), d.end());
+    threshold[b] = d[k];
+  }
+  *out = HeightTestBound{};
+  for (const ObstacleReturn& o : obstacles) {
+    const bool separable = o.dz > threshold[o.band];
+    ++out->obstacle_returns;
+    out->separable += separable;
+    if (o.cls < sim::kNumSurfaceClasses) {
+      ++out->class_returns[o.cls];
+      out->class_separable[o.cls] += separable;
     }
-    acc->add(scan.truth, result, at_ground);
   }
   return true;
 }
