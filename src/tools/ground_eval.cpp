@@ -3,7 +3,8 @@
 //
 //   ground_eval [--worlds flat,urban,rural,hillside,potholes] [--method NAME[,NAME]]
 //               [--noise datasheet|table4.1|none] [--scans N] [--seed S] [--classes]
-//               [--sick-scans N] [--at-ground-band M] [--height-bound] [--markdown OUT]
+//               [--sick-scans N] [--at-ground-band M] [--height-bound] [--misses]
+//               [--markdown OUT]
 // By default every ground model (HDL-64E revolutions) on every standard world, then the vertical
 // SICK's ground fits (the Hough fit of 3.3.4 against the 1-DOF vertical scan line), with the
 // median core time per scan; then the thesis's findings checked against the table (those whose
@@ -15,6 +16,8 @@
 // --height-bound adds, per world, the obstacle recall that a test of each return's height
 // against the exact ground surface reaches while keeping 99% of the ground (heightTestBound in
 // ground_evaluation.h): what height alone can separate at this noise, for any ground model.
+// --misses adds, per world and model, where the missed obstacle returns are: by height to the
+// ground next to them and by range (MissBreakdown in ground_evaluation.h).
 // --markdown also writes the table and the findings to OUT (for the README). Exit status 3 when a
 // finding checked is not reproduced (1: an evaluation failed, 2: bad arguments).
 #include <cstdarg>
@@ -101,6 +104,7 @@ int main(int argc, char** argv) {
   bool per_class = false;
   double at_ground_band = 0.0;
   bool height_bound = false;
+  bool misses = false;
   std::vector<std::string> sets;
   std::string png_prefix;  // PREFIX_<world>.png: the middle scan's errors, top-down  // key=value overrides of the vertical scan params
   std::string cmdline = "ground_eval";
@@ -122,6 +126,7 @@ int main(int argc, char** argv) {
     else if (a == "--sick-scans") sick_scans = std::atoi(next().c_str());
     else if (a == "--at-ground-band") at_ground_band = std::atof(next().c_str());
     else if (a == "--height-bound") height_bound = true;
+    else if (a == "--misses") misses = true;
     else if (a == "--markdown") markdown_path = next();
     else {
       const bool help = a == "-h" || a == "--help";
@@ -129,7 +134,7 @@ int main(int argc, char** argv) {
       if (!help) out << "ground_eval: unknown argument " << a << "\n";
       out << "usage: ground_eval [--worlds a,b] [--method m1,m2] "
              "[--noise datasheet|table4.1|none] [--scans N] [--seed S] [--classes] [--set key=value]... "
-             "[--png-errors PREFIX] [--sick-scans N] [--at-ground-band M] [--height-bound] [--markdown OUT]\n"
+             "[--png-errors PREFIX] [--sick-scans N] [--at-ground-band M] [--height-bound] [--misses] [--markdown OUT]\n"
              "  worlds (default all):";
       for (const std::string& w : sim::standardWorldNames()) out << " " << w;
       out << "\n  methods (default all):";
@@ -187,6 +192,7 @@ int main(int argc, char** argv) {
     std::fflush(stdout);
   };
   int status = 0;
+  std::vector<std::pair<std::string, MissBreakdown>> miss_rows;  // ("world | model", breakdown)
   for (const std::string& m : methods) {
     std::string error;
     std::unique_ptr<GroundModel> model = makeGroundModel(m, &error);
@@ -209,7 +215,9 @@ int main(int argc, char** argv) {
     for (const std::string& w : worlds) {
       GroundAccuracy acc;
       timed.reset();
-      if (!evaluateGroundModel(w, &timed, noise, scans, seed, &acc, &error, at_ground_band)) {
+      MissBreakdown miss;
+      if (!evaluateGroundModel(w, &timed, noise, scans, seed, &acc, &error, at_ground_band,
+                               misses ? &miss : nullptr)) {
         std::cerr << "ground_eval: " << w << ": " << error << "\n";
         status = 1;
         continue;
@@ -217,6 +225,18 @@ int main(int argc, char** argv) {
       const double ms = medianMs(timed.milliseconds());
       if (!png_prefix.empty()) writeErrorPng(png_prefix + "_" + w + ".png", w, model.get(), noise, scans, seed);
       row(w, model->name(), acc, ms);
+      if (misses) miss_rows.emplace_back(w + " | " + model->name(), miss);
+    }
+  }
+  if (misses) {
+    emit("\nMissed obstacle returns by height to the ground next to them (within %.1f m) and by range:\n\n"
+         "| world | method | missed | below 2 cm | 2-4 cm | 4-6 cm | 6-8 cm | 8 cm or more, or no ground near | "
+         "missed within %.0f m | missed beyond |\n|---|---|---|---|---|---|---|---|---|---|\n",
+         kAtGroundRadius, MissBreakdown::kNearRange);
+    for (const auto& [name, b] : miss_rows) {
+      emit("| %s | %zu |", name.c_str(), b.near_missed + b.far_missed);
+      for (std::size_t h : b.missed_by_height) emit(" %zu |", h);
+      emit(" %zu of %zu | %zu of %zu |\n", b.near_missed, b.near_obstacles, b.far_missed, b.far_obstacles);
     }
   }
   // The vertical SICK (thesis 3.3.4): the Hough fit against the 1-DOF vertical scan line.

@@ -125,6 +125,33 @@ TEST(GroundAccuracy, ObstacleReturnsAtTheGroundAreMarked) {
   EXPECT_EQ(at_ground, (std::vector<uint8_t>{1, 0, 0, 0, 0}));
 }
 
+TEST(GroundAccuracy, MissesAreBrokenDownByHeightAndRange) {
+  // Road at height 0 with a hole 0.1 m deep over x in [5, 6] (ground_eval --misses): a missed
+  // return 1 cm down the hole's wall is "below 2 cm", one 5 cm down "4-6 cm"; one in the middle
+  // of a 1 m hole 20 m out has no ground within 0.3 m; found returns are counted, not placed.
+  sim::World world;
+  std::string error;
+  ASSERT_TRUE(world.reset(0.0, -5.0, 0.1, 300, 100, 0.f, sim::SurfaceClass::kRoad, &error)) << error;
+  for (int ix = 50; ix < 60; ++ix) {
+    for (int iy = 0; iy < 100; ++iy) world.setCell(ix, iy, -0.1f, sim::SurfaceClass::kPothole);
+  }
+  for (int ix = 195; ix < 205; ++ix) {
+    for (int iy = 0; iy < 100; ++iy) world.setCell(ix, iy, -0.1f, sim::SurfaceClass::kPothole);
+  }
+  world.finalize();
+  MissBreakdown b;
+  const Eigen::Vector2d sensor(0.0, 0.0);
+  b.add(world, Eigen::Vector3d(5.95, 0.0, -0.01), sensor, true);
+  b.add(world, Eigen::Vector3d(5.95, 0.0, -0.05), sensor, true);
+  b.add(world, Eigen::Vector3d(5.5, 0.0, -0.1), sensor, false);
+  b.add(world, Eigen::Vector3d(20.0, 0.0, -0.1), sensor, true);
+  EXPECT_EQ(b.missed_by_height, (std::array<std::size_t, 5>{1, 0, 1, 0, 1}));
+  EXPECT_EQ(b.near_obstacles, 3u);
+  EXPECT_EQ(b.near_missed, 2u);
+  EXPECT_EQ(b.far_obstacles, 1u);
+  EXPECT_EQ(b.far_missed, 1u);
+}
+
 TEST(GroundAccuracy, HeightAloneSeparatesThePotholesOnlyWithoutNoise) {
   // The limit of a per-return height test against the exact ground (ground_eval
   // --height-bound): without noise every pothole return is below the road next to it; at the

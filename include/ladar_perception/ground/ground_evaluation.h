@@ -121,6 +121,26 @@ inline void markObstacleReturnsAtTheGround(const sim::World& world, const Eigen:
   }
 }
 
+// Where the missed obstacle returns are (ground_eval --misses): by their height to the ground
+// next to them (heightToNearbyGround(): below 2, 2-4, 4-6, 6-8 cm, 8 cm or more or no ground
+// within kAtGroundRadius) and by horizontal range from the sensor (below 10 m or not).
+struct MissBreakdown {
+  static constexpr double kNearRange = 10.0;  // [m]
+  std::array<std::size_t, 5> missed_by_height{};
+  std::size_t near_obstacles = 0, near_missed = 0;  // within kNearRange
+  std::size_t far_obstacles = 0, far_missed = 0;
+
+  // One obstacle return at `p` (world frame), seen from `sensor_xy`; missed or not.
+  void add(const sim::World& world, const Eigen::Vector3d& p, const Eigen::Vector2d& sensor_xy, bool missed) {
+    const bool near = (p.head<2>() - sensor_xy).norm() < kNearRange;
+    (near ? near_obstacles : far_obstacles) += 1;
+    if (!missed) return;
+    (near ? near_missed : far_missed) += 1;
+    const double dz = heightToNearbyGround(world, p);
+    ++missed_by_height[dz < 0.02 ? 0 : dz < 0.04 ? 1 : dz < 0.06 ? 2 : dz < 0.08 ? 3 : 4];
+  }
+};
+
 // The evaluation's scans: `scans` HDL-64E revolutions taken along the world's standard drive
 // (evenly spaced in time, noise seeds seed * 1000 + k). Calls
 // fn(world, sensor_in_world, view, truth) for each; false (and *error) when the world is
@@ -149,11 +169,11 @@ bool forEachEvaluationScan(const std::string& world_name, sim::NoiseProfile nois
 // Classifies the evaluation's scans (forEachEvaluationScan) and accumulates the accuracy. The
 // model sees the sensor pose relative to base_link (what tf gives the nodelet: base_link
 // follows the local ground). at_ground_band > 0: the obstacle returns at the ground are not
-// scored (markObstacleReturnsAtTheGround).
+// scored (markObstacleReturnsAtTheGround). misses: where the missed obstacle returns are.
 inline bool evaluateGroundModel(const std::string& world_name, GroundModel* model,
                                 sim::NoiseProfile noise, int scans, uint32_t seed,
                                 GroundAccuracy* acc, std::string* error,
-                                double at_ground_band = 0.0) {
+                                double at_ground_band = 0.0, MissBreakdown* misses = nullptr) {
   SensorPose pose;
   pose.sensor_to_ground = evaluationSensorMount().cast<float>();
   GroundClassification result;
@@ -169,6 +189,15 @@ inline bool evaluateGroundModel(const std::string& world_name, GroundModel* mode
           at_ground.clear();
         }
         acc->add(truth, result, at_ground);
+        if (!misses) return;
+        const Eigen::Vector2d sensor_xy = sensor.translation().head<2>();
+        for (std::size_t i = 0; i < truth.size() && i < view.size(); ++i) {
+          if (!sim::isObstacleClass(static_cast<sim::SurfaceClass>(truth[i]))) continue;
+          if (i < at_ground.size() && at_ground[i]) continue;  // not scored
+          const Eigen::Vector3f q = view.xyz(i);
+          if (!q.allFinite()) continue;
+          misses->add(world, sensor * q.cast<double>(), sensor_xy, result.labels[i] != kLabelObstacle);
+        }
       });
 }
 
