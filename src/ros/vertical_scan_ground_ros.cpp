@@ -26,6 +26,7 @@ VerticalScanParams toVerticalScanParams(const VerticalScanGroundConfig& c) {
   p.track_max_step = static_cast<float>(c.track_max_step);
   p.track_max_drop = static_cast<float>(c.track_max_drop);
   p.track_tolerance_per_m = static_cast<float>(c.track_tolerance_per_m);
+  p.track_drop_per_m = static_cast<float>(c.track_drop_per_m);
   p.track_max_local_slope = static_cast<float>(c.track_max_local_slope);
   p.track_min_local_slope = static_cast<float>(c.track_min_local_slope);
   p.track_anchor_distance = static_cast<float>(c.track_anchor_distance);
@@ -70,6 +71,7 @@ void loadMethodSettings(const std::string& method, VerticalScanGroundConfig* c) 
   c->track_max_step = p.track_max_step;
   c->track_max_drop = p.track_max_drop;
   c->track_tolerance_per_m = p.track_tolerance_per_m;
+  c->track_drop_per_m = p.track_drop_per_m;
   c->track_max_local_slope = p.track_max_local_slope;
   c->track_min_local_slope = p.track_min_local_slope;
   c->track_anchor_distance = p.track_anchor_distance;

@@ -184,13 +184,20 @@ TEST(VerticalScanEquations, TrackedLineBridgesAPothole) {
   for (float x : {5.25f, 5.7f, 6.0f, 6.1f}) EXPECT_NEAR(line.heightAt(x), 0.f, 0.01f) << "r " << x;
   // Its floor and wall are then below the line by more than negative_gnd_error_max.
   EXPECT_GT(line.heightAt(6.03f) - (-0.064f), p.negative_gnd_error_max);
-  // Without the floor the same far-wall return is a gentle dip the line may follow.
+  // Without the floor the same far-wall return, about 1 m past the last road return, lies
+  // outside the drop tolerance grown at track_drop_per_m (2 + 2 cm), so the line stays on the
+  // road; grown as fast as a step's (5 cm per metre) it would follow the return down.
   std::vector<float> r2, h2;
   for (std::size_t i = 0; i < r.size(); ++i) {
     if (h[i] > -0.1f) { r2.push_back(r[i]); h2.push_back(h[i]); }
   }
   vertical_scan::trackGroundLine(r2.data(), h2.data(), static_cast<int>(r2.size()), p, 0.f, knots,
                                  kh.data(), ks.data(), scratch.data());
+  EXPECT_NEAR(line.heightAt(6.03f), 0.f, 0.01f);
+  VerticalScanParams fast_drop = p;
+  fast_drop.track_drop_per_m = fast_drop.track_tolerance_per_m;
+  vertical_scan::trackGroundLine(r2.data(), h2.data(), static_cast<int>(r2.size()), fast_drop, 0.f,
+                                 knots, kh.data(), ks.data(), scratch.data());
   EXPECT_LT(line.heightAt(6.03f), -0.03f);
 }
 

@@ -45,7 +45,10 @@ struct VerticalScanParams {
   float segment_length = 0.75f;           // knot spacing of the piecewise ground line [m]
   float track_max_step = 0.12f;           // highest return above the extrapolated ground [m]
   float track_max_drop = 0.02f;           // deepest return below it [m]
-  float track_tolerance_per_m = 0.05f;    // both grow by this per metre of gap [m/m]
+  float track_tolerance_per_m = 0.05f;    // track_max_step grows by this per metre of gap [m/m]
+  // track_max_drop grows by this per metre of gap [m/m]: slower than a step's, since a hole's
+  // first return at range otherwise lies within the grown drop and the line follows it down.
+  float track_drop_per_m = 0.02f;
   float track_max_local_slope = 1.0f;     // steepest rise from the last ground return
   float track_min_local_slope = -0.4f;    // steepest fall from the last ground return
   float track_anchor_distance = 3.0f;     // the extrapolation slope spans at least this [m]
@@ -201,8 +204,9 @@ struct GroundLine {
 // The bent ground line (beyond the thesis, 5.1.2): walks the column's representatives (sorted
 // by r) from the ground point under the sensor, extrapolating with the slope of the ground so
 // far (seeded with the straight estimate `slope0`, eqs 3.4-3.9) and accepting a return as
-// ground when (a) its residual to the extrapolation lies in [-(track_max_drop + g dr),
-// track_max_step + g dr] (dr = gap to the last ground return, g = track_tolerance_per_m) and
+// ground when (a) its residual to the extrapolation lies in [-(track_max_drop + gd dr),
+// track_max_step + g dr] (dr = gap to the last ground return, g = track_tolerance_per_m,
+// gd = track_drop_per_m) and
 // (b) its slope from the last ground return lies in [track_min_local_slope,
 // track_max_local_slope]. Until the first return is accepted the line is only the straight
 // estimate from the sensor's ground point, and the lower bound is -(track_max_step + g dr).
