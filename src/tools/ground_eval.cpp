@@ -3,8 +3,8 @@
 //
 //   ground_eval [--worlds flat,urban,rural,hillside,potholes] [--method NAME[,NAME]]
 //               [--noise datasheet|table4.1|none] [--scans N] [--seed S] [--classes]
-//               [--sick-scans N] [--at-ground-band M] [--height-bound] [--misses]
-//               [--markdown OUT]
+//               [--sick-scans N] [--at-ground-band M] [--height-bound] [--region-bound]
+//               [--misses] [--markdown OUT]
 // By default every ground model (HDL-64E revolutions) on every standard world, then the vertical
 // SICK's ground fits (the Hough fit of 3.3.4 against the 1-DOF vertical scan line), with the
 // median core time per scan; then the thesis's findings checked against the table (those whose
@@ -16,6 +16,9 @@
 // --height-bound adds, per world, the obstacle recall that a test of each return's height
 // against the exact ground surface reaches while keeping 99% of the ground (heightTestBound in
 // ground_evaluation.h): what height alone can separate at this noise, for any ground model.
+// --region-bound adds, per world, the pothole recall and the ground recall of a region model of
+// holes on the exact ground surface (regionModelBound in ground_evaluation.h): seeds found by
+// their depth, linked into holes, each hole's convex hull filled.
 // --misses adds, per world and model, where the missed obstacle returns are: by height to the
 // ground next to them and by range (MissBreakdown in ground_evaluation.h).
 // --markdown also writes the table and the findings to OUT (for the README). Exit status 3 when a
@@ -104,6 +107,7 @@ int main(int argc, char** argv) {
   bool per_class = false;
   double at_ground_band = 0.0;
   bool height_bound = false;
+  bool region_bound = false;
   bool misses = false;
   std::vector<std::string> sets;
   std::string png_prefix;  // PREFIX_<world>.png: the middle scan's errors, top-down  // key=value overrides of the vertical scan params
@@ -126,6 +130,7 @@ int main(int argc, char** argv) {
     else if (a == "--sick-scans") sick_scans = std::atoi(next().c_str());
     else if (a == "--at-ground-band") at_ground_band = std::atof(next().c_str());
     else if (a == "--height-bound") height_bound = true;
+    else if (a == "--region-bound") region_bound = true;
     else if (a == "--misses") misses = true;
     else if (a == "--markdown") markdown_path = next();
     else {
@@ -134,7 +139,7 @@ int main(int argc, char** argv) {
       if (!help) out << "ground_eval: unknown argument " << a << "\n";
       out << "usage: ground_eval [--worlds a,b] [--method m1,m2] "
              "[--noise datasheet|table4.1|none] [--scans N] [--seed S] [--classes] [--set key=value]... "
-             "[--png-errors PREFIX] [--sick-scans N] [--at-ground-band M] [--height-bound] [--misses] [--markdown OUT]\n"
+             "[--png-errors PREFIX] [--sick-scans N] [--at-ground-band M] [--height-bound] [--region-bound] [--misses] [--markdown OUT]\n"
              "  worlds (default all):";
       for (const std::string& w : sim::standardWorldNames()) out << " " << w;
       out << "\n  methods (default all):";
@@ -362,6 +367,32 @@ int main(int argc, char** argv) {
         }
       }
       emit("\n");
+      std::fflush(stdout);
+    }
+  }
+  if (region_bound) {
+    const RegionModelParams rp;
+    emit("\nPothole recall reachable by a region model of holes on the exact ground (seeds deeper below the "
+         "nearest ground cell than %.1f%% of the ground returns in their range band; seeds less than %.2f m "
+         "apart form a hole; a hole of %d or more seeds takes the returns in its seeds' convex hull or within "
+         "%.2f m of a seed, unless more than %.3f m above the ground):\n\n"
+         "| world | holes | ground recall | pothole returns | pothole recall | other obstacle returns in holes |\n"
+         "|---|---|---|---|---|---|\n",
+         100.0 * rp.seed_ground_kept, rp.link, rp.min_seeds, rp.margin, rp.max_rise);
+    const int pothole = static_cast<int>(sim::SurfaceClass::kPothole);
+    for (const std::string& w : worlds) {
+      RegionModelBound bound;
+      std::string error;
+      if (!regionModelBound(w, noise, scans, seed, rp, &bound, &error)) {
+        std::cerr << "ground_eval: " << w << ": " << error << "\n";
+        status = 1;
+        continue;
+      }
+      const std::size_t n = bound.class_returns[pothole];
+      char recall[32] = "-";
+      if (n) std::snprintf(recall, sizeof(recall), "%.2f%%", 100.0 * GroundAccuracy::ratio(bound.class_found[pothole], n));
+      emit("| %s | %zu | %.2f%% | %zu | %s | %zu |\n", w.c_str(), bound.holes, 100.0 * bound.groundRecall(), n,
+           recall, bound.obstacles_found - bound.class_found[pothole]);
       std::fflush(stdout);
     }
   }

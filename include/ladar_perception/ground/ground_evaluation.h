@@ -21,6 +21,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -214,16 +215,36 @@ struct HeightTestBound {
   double recall() const { return GroundAccuracy::ratio(separable, obstacle_returns); }
 };
 
+// The bounds' bands of horizontal range from the sensor (the range noise moves a return less
+// in height the flatter the ray meets the ground): 0-5, 5-7.5, 7.5-10, 10-15, 15-20, 20-30,
+// 30-50, 50+ m.
+struct RangeBands {
+  static constexpr int kBands = 8;
+  static int band(double r) {
+    static constexpr double kEdges[kBands - 1] = {5.0, 7.5, 10.0, 15.0, 20.0, 30.0, 50.0};  // [m]
+    int b = 0;
+    while (b < kBands - 1 && r >= kEdges[b]) ++b;
+    return b;
+  }
+  // Per band, the value that a fraction `kept` of the band's values stay within (0 for an
+  // empty band); the values are reordered.
+  static std::array<double, kBands> quantiles(std::array<std::vector<double>, kBands>* values, double kept) {
+    std::array<double, kBands> q{};
+    for (int b = 0; b < kBands; ++b) {
+      std::vector<double>& d = (*values)[b];
+      if (d.empty()) continue;
+      const std::size_t k = std::min(d.size() - 1, static_cast<std::size_t>(kept * static_cast<double>(d.size())));
+      std::nth_element(d.begin(), d.begin() + static_cast<std::ptrdiff_t>(k), d.end());
+      q[b] = d[k];
+    }
+    return q;
+  }
+};
+
 inline bool heightTestBound(const std::string& world_name, sim::NoiseProfile noise, int scans,
                             uint32_t seed, double ground_kept, HeightTestBound* out,
                             std::string* error) {
-  static constexpr double kBandEdges[] = {5.0, 7.5, 10.0, 15.0, 20.0, 30.0, 50.0};  // [m]
-  constexpr int kBands = static_cast<int>(sizeof(kBandEdges) / sizeof(kBandEdges[0])) + 1;
-  auto band = [](double r) {
-    int b = 0;
-    while (b < kBands - 1 && r >= kBandEdges[b]) ++b;
-    return b;
-  };
+  constexpr int kBands = RangeBands::kBands;
   std::array<std::vector<double>, kBands> ground_dz;
   struct ObstacleReturn {
     double dz;
@@ -242,7 +263,7 @@ inline bool heightTestBound(const std::string& world_name, sim::NoiseProfile noi
           const Eigen::Vector3f q = view.xyz(i);
           if (!q.allFinite()) continue;
           const Eigen::Vector3d p = sensor * q.cast<double>();
-          const int b = band(std::hypot(p.x() - sensor.translation().x(), p.y() - sensor.translation().y()));
+          const int b = RangeBands::band(std::hypot(p.x() - sensor.translation().x(), p.y() - sensor.translation().y()));
           const double dz = heightToNearbyGround(world, p);
           if (g) {
             if (std::isfinite(dz)) ground_dz[b].push_back(dz);
@@ -252,14 +273,8 @@ inline bool heightTestBound(const std::string& world_name, sim::NoiseProfile noi
         }
       });
   if (!ok) return false;
-  std::array<double, kBands> threshold{};
-  for (int b = 0; b < kBands; ++b) {
-    std::vector<double>& d = ground_dz[b];
-    if (d.empty()) continue;  // no ground in this band: every difference is separable
-    const std::size_t k = std::min(d.size() - 1, static_cast<std::size_t>(ground_kept * static_cast<double>(d.size())));
-    std::nth_element(d.begin(), d.begin() + static_cast<std::ptrdiff_t>(k), d.end());
-    threshold[b] = d[k];
-  }
+  // No ground in a band: every difference there is separable.
+  const std::array<double, kBands> threshold = RangeBands::quantiles(&ground_dz, ground_kept);
   *out = HeightTestBound{};
   for (const ObstacleReturn& o : obstacles) {
     const bool separable = o.dz > threshold[o.band];
@@ -268,6 +283,209 @@ inline bool heightTestBound(const std::string& world_name, sim::NoiseProfile noi
     if (o.cls < sim::kNumSurfaceClasses) {
       ++out->class_returns[o.cls];
       out->class_separable[o.cls] += separable;
+    }
+  }
+  return true;
+}
+
+
+// The depth of the point p (world frame) below the ground next to it: the height of the
+// nearest ground-class cell (its own cell when that is ground, else the nearest within
+// max_radius horizontally) minus p.z; negative above it, NaN where there is none.
+inline double depthBelowNearestGround(const sim::World& world, const Eigen::Vector3d& p, double max_radius = 1.0) {
+  const int cx = world.cellX(p.x()), cy = world.cellY(p.y());
+  if (world.validCell(cx, cy) && sim::isGroundClass(world.cellClass(cx, cy))) return world.cellHeight(cx, cy) - p.z();
+  const int R = static_cast<int>(std::ceil(max_radius / world.resolution()));
+  int best_d2 = R * R + 1;
+  double best = std::numeric_limits<double>::quiet_NaN();
+  for (int dy = -R; dy <= R; ++dy) {
+    for (int dx = -R; dx <= R; ++dx) {
+      const int d2 = dx * dx + dy * dy;
+      if (d2 >= best_d2 || !world.validCell(cx + dx, cy + dy) ||
+          !sim::isGroundClass(world.cellClass(cx + dx, cy + dy))) continue;
+      best_d2 = d2;
+      best = world.cellHeight(cx + dx, cy + dy) - p.z();
+    }
+  }
+  return best;
+}
+
+// How far a region model of holes can go on the evaluation's scans, even against the exact
+// ground surface (which no estimate has): the limit behind the pothole target. Seeds are the
+// returns deeper below the nearest ground cell (depthBelowNearestGround()) than all but a
+// fraction 1 - seed_ground_kept of the ground returns in their range band (as in
+// heightTestBound()); seeds less than `link` apart form a hole; a hole of at least `min_seeds`
+// seeds takes the returns inside the convex hull of its seeds or within `margin` of one of
+// them, unless they lie more than `max_rise` above the ground (a car's side beside a hole).
+// The hole's returns are obstacles, every other return ground: the ground recall that costs is
+// reported with the obstacle recall.
+struct RegionModelParams {
+  double seed_ground_kept = 0.999;
+  double link = 0.5;       // [m]
+  double margin = 0.15;    // [m]
+  int min_seeds = 3;
+  double max_rise = 0.005;  // [m]
+};
+
+struct RegionModelBound {
+  std::size_t obstacle_returns = 0, obstacles_found = 0;
+  std::size_t ground_returns = 0, ground_kept = 0;
+  std::size_t holes = 0;
+  std::array<std::size_t, sim::kNumSurfaceClasses> class_returns{}, class_found{};
+  double obstacleRecall() const { return GroundAccuracy::ratio(obstacles_found, obstacle_returns); }
+  double groundRecall() const { return GroundAccuracy::ratio(ground_kept, ground_returns); }
+};
+
+namespace region_bound_detail {
+
+// Counter-clockwise convex hull of pts (Andrew's monotone chain); pts is reordered.
+inline std::vector<Eigen::Vector2d> convexHull(std::vector<Eigen::Vector2d> pts) {
+  std::sort(pts.begin(), pts.end(), [](const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+    return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y());
+  });
+  if (pts.size() < 3) return pts;
+  auto cross = [](const Eigen::Vector2d& o, const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+    return (a.x() - o.x()) * (b.y() - o.y()) - (a.y() - o.y()) * (b.x() - o.x());
+  };
+  std::vector<Eigen::Vector2d> hull(2 * pts.size());
+  std::size_t k = 0;
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    while (k >= 2 && cross(hull[k - 2], hull[k - 1], pts[i]) <= 0.0) --k;
+    hull[k++] = pts[i];
+  }
+  for (std::size_t i = pts.size() - 1, lower = k + 1; i-- > 0;) {
+    while (k >= lower && cross(hull[k - 2], hull[k - 1], pts[i]) <= 0.0) --k;
+    hull[k++] = pts[i];
+  }
+  hull.resize(k - 1);
+  return hull;
+}
+
+inline bool insideConvex(const std::vector<Eigen::Vector2d>& hull, const Eigen::Vector2d& q) {
+  if (hull.size() < 3) return false;
+  for (std::size_t i = 0; i < hull.size(); ++i) {
+    const Eigen::Vector2d& a = hull[i];
+    const Eigen::Vector2d& b = hull[(i + 1) % hull.size()];
+    if ((b.x() - a.x()) * (q.y() - a.y()) - (b.y() - a.y()) * (q.x() - a.x()) < 0.0) return false;
+  }
+  return true;
+}
+
+}  // namespace region_bound_detail
+
+inline bool regionModelBound(const std::string& world_name, sim::NoiseProfile noise, int scans, uint32_t seed,
+                             const RegionModelParams& params, RegionModelBound* out, std::string* error) {
+  constexpr int kBands = RangeBands::kBands;
+  struct Return {
+    Eigen::Vector2d xy;
+    double depth;  // below the nearest ground cell; NaN: none within reach
+    int band;
+    int scan;
+    uint8_t cls;
+  };
+  std::vector<Return> returns;
+  std::array<std::vector<double>, kBands> ground_depth;
+  int scan_index = 0;
+  const bool ok = forEachEvaluationScan(
+      world_name, noise, scans, seed, error,
+      [&](const sim::World& world, const Eigen::Isometry3d& sensor, const PointCloudView& view,
+          const std::vector<uint8_t>& truth) {
+        for (std::size_t i = 0; i < truth.size() && i < view.size(); ++i) {
+          const auto c = static_cast<sim::SurfaceClass>(truth[i]);
+          const bool g = sim::isGroundClass(c);
+          if (!g && !sim::isObstacleClass(c)) continue;
+          const Eigen::Vector3f q = view.xyz(i);
+          if (!q.allFinite()) continue;
+          const Eigen::Vector3d p = sensor * q.cast<double>();
+          const double r = std::hypot(p.x() - sensor.translation().x(), p.y() - sensor.translation().y());
+          const int b = RangeBands::band(r);
+          const double depth = depthBelowNearestGround(world, p);
+          if (g && std::isfinite(depth)) ground_depth[b].push_back(depth);
+          returns.push_back({p.head<2>(), depth, b, scan_index, truth[i]});
+        }
+        ++scan_index;
+      });
+  if (!ok) return false;
+  *out = RegionModelBound{};
+  const std::array<double, kBands> threshold = RangeBands::quantiles(&ground_depth, params.seed_ground_kept);
+  auto is_seed = [&](const Return& x) {
+    return std::isfinite(x.depth) && x.depth > std::max(threshold[x.band], 0.0);
+  };
+  std::vector<uint8_t> found(returns.size(), 0);
+  // Per scan: link the seeds through a grid of `link` cells (union-find), then fill each hole.
+  const double cell = params.link;
+  auto key = [cell](const Eigen::Vector2d& xy) {
+    return std::make_pair(static_cast<int64_t>(std::floor(xy.x() / cell)), static_cast<int64_t>(std::floor(xy.y() / cell)));
+  };
+  std::size_t begin = 0;
+  while (begin < returns.size()) {
+    std::size_t end = begin;
+    while (end < returns.size() && returns[end].scan == returns[begin].scan) ++end;
+    std::vector<std::size_t> seeds;
+    for (std::size_t i = begin; i < end; ++i) {
+      if (is_seed(returns[i])) seeds.push_back(i);
+    }
+    std::vector<std::size_t> parent(seeds.size());
+    for (std::size_t s = 0; s < seeds.size(); ++s) parent[s] = s;
+    auto find = [&parent](std::size_t s) {
+      while (parent[s] != s) s = parent[s] = parent[parent[s]];
+      return s;
+    };
+    std::map<std::pair<int64_t, int64_t>, std::vector<std::size_t>> grid;
+    for (std::size_t s = 0; s < seeds.size(); ++s) grid[key(returns[seeds[s]].xy)].push_back(s);
+    for (std::size_t s = 0; s < seeds.size(); ++s) {
+      const auto k = key(returns[seeds[s]].xy);
+      for (int64_t dx = -1; dx <= 1; ++dx) {
+        for (int64_t dy = -1; dy <= 1; ++dy) {
+          const auto it = grid.find({k.first + dx, k.second + dy});
+          if (it == grid.end()) continue;
+          for (std::size_t t : it->second) {
+            if ((returns[seeds[t]].xy - returns[seeds[s]].xy).norm() < params.link) parent[find(s)] = find(t);
+          }
+        }
+      }
+    }
+    std::map<std::size_t, std::vector<std::size_t>> holes;  // root -> seeds
+    for (std::size_t s = 0; s < seeds.size(); ++s) holes[find(s)].push_back(s);
+    for (const auto& h : holes) {
+      if (static_cast<int>(h.second.size()) < params.min_seeds) continue;
+      ++out->holes;
+      std::vector<Eigen::Vector2d> pts;
+      Eigen::Vector2d lo(std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity());
+      Eigen::Vector2d hi = -lo;
+      for (std::size_t s : h.second) {
+        const Eigen::Vector2d& xy = returns[seeds[s]].xy;
+        pts.push_back(xy);
+        lo = lo.cwiseMin(xy);
+        hi = hi.cwiseMax(xy);
+        found[seeds[s]] = 1;
+      }
+      const std::vector<Eigen::Vector2d> hull = region_bound_detail::convexHull(pts);
+      lo.array() -= params.margin;
+      hi.array() += params.margin;
+      for (std::size_t i = begin; i < end; ++i) {
+        const Return& x = returns[i];
+        if (found[i] || (x.xy.array() < lo.array()).any() || (x.xy.array() > hi.array()).any()) continue;
+        if (std::isfinite(x.depth) && x.depth < -params.max_rise) continue;
+        bool inside = region_bound_detail::insideConvex(hull, x.xy);
+        for (std::size_t j = 0; !inside && j < pts.size(); ++j) inside = (pts[j] - x.xy).norm() < params.margin;
+        found[i] = inside;
+      }
+    }
+    begin = end;
+  }
+  for (std::size_t i = 0; i < returns.size(); ++i) {
+    const Return& x = returns[i];
+    if (sim::isGroundClass(static_cast<sim::SurfaceClass>(x.cls))) {
+      ++out->ground_returns;
+      out->ground_kept += !found[i];
+    } else {
+      ++out->obstacle_returns;
+      out->obstacles_found += found[i];
+      if (x.cls < sim::kNumSurfaceClasses) {
+        ++out->class_returns[x.cls];
+        out->class_found[x.cls] += found[i];
+      }
     }
   }
   return true;
