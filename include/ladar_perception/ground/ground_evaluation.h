@@ -241,6 +241,30 @@ struct RangeBands {
   }
 };
 
+// The scored returns of the evaluation's scans (truth ground or obstacle, finite): calls
+// fn(world, scan_index, p, band, cls) with p in the world frame and band the RangeBands band
+// of its horizontal distance from the sensor.
+template <typename ReturnFn>
+bool forEachScoredReturn(const std::string& world_name, sim::NoiseProfile noise, int scans, uint32_t seed,
+                         std::string* error, ReturnFn fn) {
+  int scan_index = 0;
+  return forEachEvaluationScan(
+      world_name, noise, scans, seed, error,
+      [&](const sim::World& world, const Eigen::Isometry3d& sensor, const PointCloudView& view,
+          const std::vector<uint8_t>& truth) {
+        for (std::size_t i = 0; i < truth.size() && i < view.size(); ++i) {
+          const auto c = static_cast<sim::SurfaceClass>(truth[i]);
+          if (!sim::isGroundClass(c) && !sim::isObstacleClass(c)) continue;
+          const Eigen::Vector3f q = view.xyz(i);
+          if (!q.allFinite()) continue;
+          const Eigen::Vector3d p = sensor * q.cast<double>();
+          const double r = std::hypot(p.x() - sensor.translation().x(), p.y() - sensor.translation().y());
+          fn(world, scan_index, p, RangeBands::band(r), truth[i]);
+        }
+        ++scan_index;
+      });
+}
+
 inline bool heightTestBound(const std::string& world_name, sim::NoiseProfile noise, int scans,
                             uint32_t seed, double ground_kept, HeightTestBound* out,
                             std::string* error) {
@@ -252,24 +276,14 @@ inline bool heightTestBound(const std::string& world_name, sim::NoiseProfile noi
     uint8_t cls;
   };
   std::vector<ObstacleReturn> obstacles;
-  const bool ok = forEachEvaluationScan(
+  const bool ok = forEachScoredReturn(
       world_name, noise, scans, seed, error,
-      [&](const sim::World& world, const Eigen::Isometry3d& sensor, const PointCloudView& view,
-          const std::vector<uint8_t>& truth) {
-        for (std::size_t i = 0; i < truth.size() && i < view.size(); ++i) {
-          const auto c = static_cast<sim::SurfaceClass>(truth[i]);
-          const bool g = sim::isGroundClass(c), o = sim::isObstacleClass(c);
-          if (!g && !o) continue;
-          const Eigen::Vector3f q = view.xyz(i);
-          if (!q.allFinite()) continue;
-          const Eigen::Vector3d p = sensor * q.cast<double>();
-          const int b = RangeBands::band(std::hypot(p.x() - sensor.translation().x(), p.y() - sensor.translation().y()));
-          const double dz = heightToNearbyGround(world, p);
-          if (g) {
-            if (std::isfinite(dz)) ground_dz[b].push_back(dz);
-          } else {
-            obstacles.push_back({dz, b, truth[i]});
-          }
+      [&](const sim::World& world, int, const Eigen::Vector3d& p, int b, uint8_t cls) {
+        const double dz = heightToNearbyGround(world, p);
+        if (sim::isGroundClass(static_cast<sim::SurfaceClass>(cls))) {
+          if (std::isfinite(dz)) ground_dz[b].push_back(dz);
+        } else {
+          obstacles.push_back({dz, b, cls});
         }
       });
   if (!ok) return false;
@@ -385,25 +399,14 @@ inline bool regionModelBound(const std::string& world_name, sim::NoiseProfile no
   };
   std::vector<Return> returns;
   std::array<std::vector<double>, kBands> ground_depth;
-  int scan_index = 0;
-  const bool ok = forEachEvaluationScan(
+  const bool ok = forEachScoredReturn(
       world_name, noise, scans, seed, error,
-      [&](const sim::World& world, const Eigen::Isometry3d& sensor, const PointCloudView& view,
-          const std::vector<uint8_t>& truth) {
-        for (std::size_t i = 0; i < truth.size() && i < view.size(); ++i) {
-          const auto c = static_cast<sim::SurfaceClass>(truth[i]);
-          const bool g = sim::isGroundClass(c);
-          if (!g && !sim::isObstacleClass(c)) continue;
-          const Eigen::Vector3f q = view.xyz(i);
-          if (!q.allFinite()) continue;
-          const Eigen::Vector3d p = sensor * q.cast<double>();
-          const double r = std::hypot(p.x() - sensor.translation().x(), p.y() - sensor.translation().y());
-          const int b = RangeBands::band(r);
-          const double depth = depthBelowNearestGround(world, p);
-          if (g && std::isfinite(depth)) ground_depth[b].push_back(depth);
-          returns.push_back({p.head<2>(), depth, b, scan_index, truth[i]});
+      [&](const sim::World& world, int scan, const Eigen::Vector3d& p, int b, uint8_t cls) {
+        const double depth = depthBelowNearestGround(world, p);
+        if (sim::isGroundClass(static_cast<sim::SurfaceClass>(cls)) && std::isfinite(depth)) {
+          ground_depth[b].push_back(depth);
         }
-        ++scan_index;
+        returns.push_back({p.head<2>(), depth, b, scan, cls});
       });
   if (!ok) return false;
   *out = RegionModelBound{};
