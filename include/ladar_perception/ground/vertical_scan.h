@@ -90,8 +90,8 @@ struct VerticalScanParams {
   // knots before r (the ground in front of the step) and the rise is dHeight / |dr| to the
   // representative of the laser row above. P = max(P_3.15, P_vertical, P_foot). 0 = off.
   float vertical_foot_slope = 1.0f;
-  // Laser-neighbour context (beyond the thesis; off by default: it costs about half as much
-  // time again per scan, see README). Each return's neighbours are the returns of the laser
+  // Laser-neighbour context (beyond the thesis; on in the default settings, off here and in
+  // the "bins" settings: it costs about a fifth more instructions per scan, see README). Each return's neighbours are the returns of the laser
   // rows just below and above it in the same sub-column (neighbour_cells_per_column per column,
   // about 0.19 degrees for 1.5 degree columns), found through a range image, whatever the order
   // of the input. First, a return that eq 3.15 called a negative obstacle is scored again with
