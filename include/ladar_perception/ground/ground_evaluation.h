@@ -302,7 +302,6 @@ inline bool heightTestBound(const std::string& world_name, sim::NoiseProfile noi
   return true;
 }
 
-
 // The depth of the point p (world frame) below the ground next to it: the height of the
 // nearest ground-class cell (its own cell when that is ground, else the nearest within
 // max_radius horizontally) minus p.z; negative above it, NaN where there is none.

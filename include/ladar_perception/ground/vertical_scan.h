@@ -91,10 +91,10 @@ struct VerticalScanParams {
   // representative of the laser row above. P = max(P_3.15, P_vertical, P_foot). 0 = off.
   float vertical_foot_slope = 1.0f;
   // Laser-neighbour context (beyond the thesis; on in the default settings, off here and in
-  // the "bins" settings: it costs about a fifth more instructions per scan, see README). Each return's neighbours are the returns of the laser
-  // rows just below and above it in the same sub-column (neighbour_cells_per_column per column,
-  // about 0.19 degrees for 1.5 degree columns), found through a range image, whatever the order
-  // of the input. First, a return that eq 3.15 called a negative obstacle is scored again with
+  // the "bins" settings: it costs about a fifth more instructions per scan, see README).
+  // Each return's neighbours are the returns of the laser rows just below and above it in the
+  // same sub-column (neighbour_cells_per_column per column, about 0.19 degrees for 1.5 degree
+  // columns), found through a range image, whatever the order of the input. First, a return that eq 3.15 called a negative obstacle is scored again with
   // its depth below the foot of a step: the lower of the line and the line's previous segment
   // extended (where a segment climbs a curb within it, the road in front of the curb lies below
   // the segment). Then a return labelled ground becomes an obstacle when
@@ -206,10 +206,10 @@ struct GroundLine {
 // far (seeded with the straight estimate `slope0`, eqs 3.4-3.9) and accepting a return as
 // ground when (a) its residual to the extrapolation lies in [-(track_max_drop + gd dr),
 // track_max_step + g dr] (dr = gap to the last ground return, g = track_tolerance_per_m,
-// gd = track_drop_per_m) and
-// (b) its slope from the last ground return lies in [track_min_local_slope,
-// track_max_local_slope]. Until the first return is accepted the line is only the straight
-// estimate from the sensor's ground point, and the lower bound is -(track_max_step + g dr).
+// gd = track_drop_per_m) and (b) its slope from the last ground return lies in
+// [track_min_local_slope, track_max_local_slope]. Until the first return is accepted the line
+// is only the straight estimate from the sensor's ground point, and the lower bound is
+// -(track_max_step + gd dr).
 // (VerticalScanGround seeds it with the straight estimate over the representatives off
 // vertical surfaces.) The accepted polyline is sampled at the knots (extrapolated beyond
 // the last ground return); knot_support gets 1 / (1 + distance to the nearest ground return).
