@@ -94,10 +94,10 @@ struct VerticalScanParams {
   // the "bins" settings: it costs about a fifth more instructions per scan, see README).
   // Each return's neighbours are the returns of the laser rows just below and above it in the
   // same sub-column (neighbour_cells_per_column per column, about 0.19 degrees for 1.5 degree
-  // columns), found through a range image, whatever the order of the input. First, a return that eq 3.15 called a negative obstacle is scored again with
-  // its depth below the foot of a step: the lower of the line and the line's previous segment
-  // extended (where a segment climbs a curb within it, the road in front of the curb lies below
-  // the segment). Then a return labelled ground becomes an obstacle when
+  // columns), found through a range image, whatever the order of the input. First, a return
+  // that eq 3.15 called a negative obstacle is scored again with its depth below the foot of a
+  // step: the lower of the line and the line's previous segment extended (where a segment
+  // climbs a curb within it, the road in front of the curb lies below the segment). Then a return labelled ground becomes an obstacle when
   //  - it is on a vertical face: the neighbour above (or below) is an obstacle, higher (lower)
   //    by at least neighbour_min_step, and within neighbour_max_dr of it in r, but no more than
   //    neighbour_spacing_fraction of the spacing of the two rows on flat ground at that range
