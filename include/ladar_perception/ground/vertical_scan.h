@@ -97,7 +97,8 @@ struct VerticalScanParams {
   // columns), found through a range image, whatever the order of the input. First, a return
   // that eq 3.15 called a negative obstacle is scored again with its depth below the foot of a
   // step: the lower of the line and the line's previous segment extended (where a segment
-  // climbs a curb within it, the road in front of the curb lies below the segment). Then a return labelled ground becomes an obstacle when
+  // climbs a curb within it, the road in front of the curb lies below the segment). Then a
+  // return labelled ground becomes an obstacle when
   //  - it is on a vertical face: the neighbour above (or below) is an obstacle, higher (lower)
   //    by at least neighbour_min_step, and within neighbour_max_dr of it in r, but no more than
   //    neighbour_spacing_fraction of the spacing of the two rows on flat ground at that range
