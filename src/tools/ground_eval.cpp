@@ -197,6 +197,11 @@ int main(int argc, char** argv) {
     std::fflush(stdout);
   };
   int status = 0;
+  // A world that could not be evaluated: said on stderr, the exit status 1, the other rows go on.
+  auto evaluation_failed = [&status](const std::string& world, const std::string& error) {
+    std::cerr << "ground_eval: " << world << ": " << error << "\n";
+    status = 1;
+  };
   std::vector<std::pair<std::string, MissBreakdown>> miss_rows;  // ("world | model", breakdown)
   for (const std::string& m : methods) {
     std::string error;
@@ -223,8 +228,7 @@ int main(int argc, char** argv) {
       MissBreakdown miss;
       if (!evaluateGroundModel(w, &timed, noise, scans, seed, &acc, &error, at_ground_band,
                                misses ? &miss : nullptr)) {
-        std::cerr << "ground_eval: " << w << ": " << error << "\n";
-        status = 1;
+        evaluation_failed(w, error);
         continue;
       }
       const double ms = medianMs(timed.milliseconds());
@@ -252,8 +256,7 @@ int main(int argc, char** argv) {
         std::vector<double> ms;
         std::string error;
         if (!evaluateVerticalSick(w, fit, noise, sick_scans, seed, &acc, &ms, &error)) {
-          std::cerr << "ground_eval: " << w << ": " << error << "\n";
-          status = 1;
+          evaluation_failed(w, error);
           continue;
         }
         row(w, sickGroundFitName(fit), acc, medianMs(ms));
@@ -352,8 +355,7 @@ int main(int argc, char** argv) {
       HeightTestBound bound;
       std::string error;
       if (!heightTestBound(w, noise, scans, seed, kGroundKept, &bound, &error)) {
-        std::cerr << "ground_eval: " << w << ": " << error << "\n";
-        status = 1;
+        evaluation_failed(w, error);
         continue;
       }
       emit("| %s | %zu | %.2f%% |", w.c_str(), bound.obstacle_returns, 100.0 * bound.recall());
@@ -384,8 +386,7 @@ int main(int argc, char** argv) {
       RegionModelBound bound;
       std::string error;
       if (!regionModelBound(w, noise, scans, seed, rp, &bound, &error)) {
-        std::cerr << "ground_eval: " << w << ": " << error << "\n";
-        status = 1;
+        evaluation_failed(w, error);
         continue;
       }
       const std::size_t n = bound.class_returns[pothole];

@@ -345,7 +345,6 @@ struct RegionModelBound {
   std::size_t ground_returns = 0, ground_kept = 0;
   std::size_t holes = 0;
   std::array<std::size_t, sim::kNumSurfaceClasses> class_returns{}, class_found{};
-  double obstacleRecall() const { return GroundAccuracy::ratio(obstacles_found, obstacle_returns); }
   double groundRecall() const { return GroundAccuracy::ratio(ground_kept, ground_returns); }
 };
 
