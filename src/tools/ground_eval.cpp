@@ -4,7 +4,7 @@
 //   ground_eval [--worlds flat,urban,rural,hillside,potholes] [--method NAME[,NAME]]
 //               [--noise datasheet|table4.1|none] [--scans N] [--seed S] [--classes]
 //               [--sick-scans N] [--at-ground-band M] [--height-bound] [--region-bound]
-//               [--misses] [--markdown OUT]
+//               [--region-seed-kept F] [--misses] [--markdown OUT]
 // By default every ground model (HDL-64E revolutions) on every standard world, then the vertical
 // SICK's ground fits (the Hough fit of 3.3.4 against the 1-DOF vertical scan line), with the
 // median core time per scan; then the thesis's findings checked against the table (those whose
@@ -18,7 +18,8 @@
 // ground_evaluation.h): what height alone can separate at this noise, for any ground model.
 // --region-bound adds, per world, the pothole recall and the ground recall of a region model of
 // holes on the exact ground surface (regionModelBound in ground_evaluation.h): seeds found by
-// their depth, linked into holes, each hole's convex hull filled.
+// their depth, linked into holes, each hole's convex hull filled. --region-seed-kept F (0 < F < 1,
+// default 0.9999): seeds are deeper than all but 1 - F of the ground returns in their range band.
 // --misses adds, per world and model, where the missed obstacle returns are: by height to the
 // ground next to them and by range (MissBreakdown in ground_evaluation.h).
 // --markdown also writes the table and the findings to OUT (for the README). Exit status 3 when a
@@ -108,6 +109,7 @@ int main(int argc, char** argv) {
   double at_ground_band = 0.0;
   bool height_bound = false;
   bool region_bound = false;
+  RegionModelParams region_params;
   bool misses = false;
   std::vector<std::string> sets;
   std::string png_prefix;  // PREFIX_<world>.png: the middle scan's errors, top-down  // key=value overrides of the vertical scan params
@@ -131,6 +133,13 @@ int main(int argc, char** argv) {
     else if (a == "--at-ground-band") at_ground_band = std::atof(next().c_str());
     else if (a == "--height-bound") height_bound = true;
     else if (a == "--region-bound") region_bound = true;
+    else if (a == "--region-seed-kept") {
+      region_params.seed_ground_kept = std::atof(next().c_str());
+      if (!(region_params.seed_ground_kept > 0.0 && region_params.seed_ground_kept < 1.0)) {
+        std::cerr << "ground_eval: --region-seed-kept needs a fraction between 0 and 1\n";
+        return 2;
+      }
+    }
     else if (a == "--misses") misses = true;
     else if (a == "--markdown") markdown_path = next();
     else {
@@ -139,7 +148,7 @@ int main(int argc, char** argv) {
       if (!help) out << "ground_eval: unknown argument " << a << "\n";
       out << "usage: ground_eval [--worlds a,b] [--method m1,m2] "
              "[--noise datasheet|table4.1|none] [--scans N] [--seed S] [--classes] [--set key=value]... "
-             "[--png-errors PREFIX] [--sick-scans N] [--at-ground-band M] [--height-bound] [--region-bound] [--misses] [--markdown OUT]\n"
+             "[--png-errors PREFIX] [--sick-scans N] [--at-ground-band M] [--height-bound] [--region-bound] [--region-seed-kept F] [--misses] [--markdown OUT]\n"
              "  worlds (default all):";
       for (const std::string& w : sim::standardWorldNames()) out << " " << w;
       out << "\n  methods (default all):";
@@ -373,9 +382,9 @@ int main(int argc, char** argv) {
     }
   }
   if (region_bound) {
-    const RegionModelParams rp;
+    const RegionModelParams& rp = region_params;
     emit("\nPothole recall reachable by a region model of holes on the exact ground (seeds deeper below the "
-         "nearest ground cell than %.1f%% of the ground returns in their range band; seeds less than %.2f m "
+         "nearest ground cell than %.2f%% of the ground returns in their range band; seeds less than %.2f m "
          "apart form a hole; a hole of %d or more seeds takes the returns in its seeds' convex hull or within "
          "%.2f m of a seed, unless more than %.3f m above the ground):\n\n"
          "| world | holes | ground recall | pothole returns | pothole recall | other obstacle returns in holes |\n"

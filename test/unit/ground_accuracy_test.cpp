@@ -175,8 +175,8 @@ TEST(GroundAccuracy, HeightAloneSeparatesThePotholesOnlyWithoutNoise) {
 TEST(GroundAccuracy, ARegionModelOnTheExactGroundFindsThePotholes) {
   // The limit of a region model of holes on the exact ground (ground_eval --region-bound):
   // linking the deep returns into holes and filling each hole's convex hull finds the shallow
-  // rim and wall returns that no per-return height test can (2 scans: 98.8 % without noise,
-  // 93.9 % at the HDL-64E's 2 cm, 17 % at Table 4.1's 0.2 m), at little cost to the ground.
+  // rim and wall returns that no per-return height test can (2 scans: 98.5 % without noise,
+  // 93.3 % at the HDL-64E's 2 cm, 9 % at Table 4.1's 0.2 m), at little cost to the ground.
   std::string error;
   const RegionModelParams params;
   RegionModelBound none, datasheet, table41, flat;

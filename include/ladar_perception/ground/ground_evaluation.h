@@ -331,9 +331,11 @@ inline double depthBelowNearestGround(const sim::World& world, const Eigen::Vect
 // seeds takes the returns inside the convex hull of its seeds or within `margin` of one of
 // them, unless they lie more than `max_rise` above the ground (a car's side beside a hole).
 // The hole's returns are obstacles, every other return ground: the ground recall that costs is
-// reported with the obstacle recall.
+// reported with the obstacle recall. With seeds deeper than 99.99% of the ground (the default)
+// no world loses more than 0.3% of its ground to holes; 99.9% finds a few more pothole returns
+// but seeds holes along curbs and terrace edges (ground_eval --region-seed-kept).
 struct RegionModelParams {
-  double seed_ground_kept = 0.999;
+  double seed_ground_kept = 0.9999;
   double link = 0.5;       // [m]
   double margin = 0.15;    // [m]
   int min_seeds = 3;
