@@ -382,19 +382,18 @@ int main(int argc, char** argv) {
     }
   }
   if (region_bound) {
-    const RegionModelParams& rp = region_params;
     emit("\nPothole recall reachable by a region model of holes on the exact ground (seeds deeper below the "
          "nearest ground cell than %.2f%% of the ground returns in their range band; seeds less than %.2f m "
          "apart form a hole; a hole of %d or more seeds takes the returns in its seeds' convex hull or within "
          "%.2f m of a seed, unless more than %.3f m above the ground):\n\n"
          "| world | holes | ground recall | pothole returns | pothole recall | other obstacle returns in holes |\n"
          "|---|---|---|---|---|---|\n",
-         100.0 * rp.seed_ground_kept, rp.link, rp.min_seeds, rp.margin, rp.max_rise);
+         100.0 * region_params.seed_ground_kept, region_params.link, region_params.min_seeds, region_params.margin, region_params.max_rise);
     const int pothole = static_cast<int>(sim::SurfaceClass::kPothole);
     for (const std::string& w : worlds) {
       RegionModelBound bound;
       std::string error;
-      if (!regionModelBound(w, noise, scans, seed, rp, &bound, &error)) {
+      if (!regionModelBound(w, noise, scans, seed, region_params, &bound, &error)) {
         evaluation_failed(w, error);
         continue;
       }
