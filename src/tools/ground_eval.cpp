@@ -388,7 +388,8 @@ int main(int argc, char** argv) {
          "%.2f m of a seed, unless more than %.3f m above the ground):\n\n"
          "| world | holes | ground recall | pothole returns | pothole recall | other obstacle returns in holes |\n"
          "|---|---|---|---|---|---|\n",
-         100.0 * region_params.seed_ground_kept, region_params.link, region_params.min_seeds, region_params.margin, region_params.max_rise);
+         100.0 * region_params.seed_ground_kept, region_params.link, region_params.min_seeds,
+         region_params.margin, region_params.max_rise);
     const int pothole = static_cast<int>(sim::SurfaceClass::kPothole);
     for (const std::string& w : worlds) {
       RegionModelBound bound;
