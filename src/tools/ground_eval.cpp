@@ -22,8 +22,13 @@
 // default 0.9999): seeds are deeper than all but 1 - F of the ground returns in their range band.
 // --misses adds, per world and model, where the missed obstacle returns are: by height to the
 // ground next to them and by range (MissBreakdown in ground_evaluation.h).
+// ground_eval --semantickitti DIR [--frames a:b] [--sensor-height M] [--compare-masks NAME=DIR]:
+// the methods on real labelled scans in the SemanticKITTI layout instead (eval/semantic_kitti.h:
+// protocols A and B, per class, per range band, F1 spread over the frames, median ms), with
+// other programs' ground masks scored in the same run.
 // --markdown also writes the table and the findings to OUT (for the README). Exit status 3 when a
 // finding checked is not reproduced (1: an evaluation failed, 2: bad arguments).
+#include <cmath>
 #include <cstdarg>
 #include <cstdio>
 #include <cstdlib>
@@ -34,6 +39,7 @@
 #include <string>
 #include <vector>
 
+#include "ladar_perception/eval/real_ground_eval.h"
 #include "ladar_perception/ground/ground_evaluation.h"
 #include "ladar_perception/ground/hough_evaluation.h"
 #include "ladar_perception/ground/vertical_scan.h"
@@ -49,6 +55,111 @@ std::vector<std::string> split(const std::string& s) {
   while (std::getline(ss, item, ',')) if (!item.empty()) out.push_back(item);
   return out;
 }
+// Writes `text` to `path` through a temporary file and a rename; false with a message.
+bool writeTextFile(const std::string& path, const std::string& text) {
+  const std::string tmp = path + ".tmp";
+  std::ofstream f(tmp);
+  f << text;
+  f.close();
+  if (!f || std::rename(tmp.c_str(), path.c_str()) != 0) {
+    std::cerr << "ground_eval: cannot write " << path << "\n";
+    return false;
+  }
+  return true;
+}
+
+// A ground model by name with the --set overrides (vertical scan models only); nullptr with a
+// reason otherwise.
+std::unique_ptr<GroundModel> makeModel(const std::string& name, const std::vector<std::string>& sets,
+                                       std::string* error) {
+  std::unique_ptr<GroundModel> model = makeGroundModel(name, error);
+  if (!model || sets.empty()) return model;
+  auto* vs = dynamic_cast<VerticalScanGround*>(model.get());
+  if (!vs) {
+    *error = "--set applies to vertical scan models only (not " + name + ")";
+    return nullptr;
+  }
+  VerticalScanParams params = vs->params();
+  for (const std::string& kv : sets) {
+    const std::size_t eq = kv.find('=');
+    if (eq == std::string::npos ||
+        !setVerticalScanParam(&params, kv.substr(0, eq), std::atof(kv.c_str() + eq + 1), error)) {
+      *error = "bad --set " + kv + " " + *error;
+      return nullptr;
+    }
+  }
+  vs->setParams(params);
+  return model;
+}
+
+// ground_eval --semantickitti DIR: every method over the labelled frames of DIR, and the mask
+// files of other programs (--compare-masks NAME=MASK_DIR), scored under protocols A and B.
+int evaluateSemanticKitti(const std::string& dir, const std::string& frame_range, float sensor_height,
+                          const std::vector<std::string>& methods, const std::vector<std::string>& sets,
+                          const std::vector<std::string>& mask_sources, const std::string& png_prefix,
+                          const std::string& cmdline, std::string* markdown) {
+  long first = 0, last = -1;
+  if (!frame_range.empty() && !eval::parseFrameRange(frame_range, &first, &last)) {
+    std::cerr << "ground_eval: --frames takes a:b, a:, :b or a frame number\n";
+    return 2;
+  }
+  std::string error;
+  std::vector<eval::LabelledFrameFiles> files;
+  std::vector<eval::LabelledFrame> frames;
+  if (!eval::listLabelledFrames(dir, first, last, &files, &error) ||
+      !eval::loadLabelledFrames(files, &frames, &error)) {
+    std::cerr << "ground_eval: " << error << "\n";
+    return 1;
+  }
+  std::vector<eval::MethodScore> scores;
+  const SensorPose pose = SensorPose::fromHeight(sensor_height);
+  for (const std::string& m : methods) {
+    std::unique_ptr<GroundModel> model = makeModel(m, sets, &error);
+    if (!model) { std::cerr << "ground_eval: " << error << "\n"; return 2; }
+    eval::MethodScore score;
+    std::vector<std::vector<uint8_t>> called;
+    if (!eval::scoreGroundModel(model.get(), frames, pose, &score, &error, png_prefix.empty() ? nullptr : &called)) {
+      std::cerr << "ground_eval: " << error << "\n";
+      return 1;
+    }
+    for (std::size_t k = 0; k < called.size(); ++k) {
+      const std::string path = png_prefix + "_" + score.method + "_" + frames[k].name + ".png";
+      if (!eval::writeRealErrorPng(path, frames[k], called[k], sensor_height, &error))
+        std::cerr << "ground_eval: " << error << "\n";
+    }
+    scores.push_back(std::move(score));
+  }
+  for (const std::string& source : mask_sources) {
+    const std::size_t eq = source.find('=');
+    if (eq == std::string::npos || eq == 0 || eq + 1 == source.size()) {
+      std::cerr << "ground_eval: --compare-masks takes NAME=MASK_DIR\n";
+      return 2;
+    }
+    eval::MethodScore score;
+    if (!eval::scoreMaskFiles(source.substr(0, eq), source.substr(eq + 1), frames, sensor_height, &score, &error)) {
+      std::cerr << "ground_eval: " << error << "\n";
+      return 1;
+    }
+    scores.push_back(std::move(score));
+  }
+  std::string names;
+  for (const eval::LabelledFrame& f : frames) names += (names.empty() ? "" : ", ") + f.name;
+  std::string& out = *markdown;
+  out += "`" + cmdline + "`\n\nFrames of " + dir + ": " + names + " (sensor height " +
+         std::to_string(sensor_height).substr(0, 4) + " m). Protocol A: ground = road, parking, sidewalk, "
+         "other-ground, lane-marking, terrain; vegetation, unlabeled and outlier not scored. Protocol B: "
+         "vegetation below -0.75 x the sensor height is ground; unlabeled and outlier called ground are "
+         "dropped.\n\n";
+  out += eval::realGroundSummaryTable(scores);
+  out += "\nProtocol A by class (ground classes: share called ground; non-ground: share called ground, "
+         "with the count):\n\n";
+  out += eval::realGroundClassTable(scores);
+  out += "\nProtocol A by horizontal range:\n\n";
+  out += eval::realGroundRangeTable(scores);
+  std::fputs(out.c_str(), stdout);
+  return 0;
+}
+
 }  // namespace
 
 // Top-down picture of the middle scan of the evaluation: correct ground dark green, correct
@@ -113,6 +224,9 @@ int main(int argc, char** argv) {
   bool misses = false;
   std::vector<std::string> sets;
   std::string png_prefix;  // PREFIX_<world>.png: the middle scan's errors, top-down  // key=value overrides of the vertical scan params
+  std::string semantickitti_dir, frame_range;  // --semantickitti DIR [--frames a:b]
+  float sensor_height = 1.73f;                    // real scans: metres above the ground
+  std::vector<std::string> mask_sources;          // --compare-masks NAME=MASK_DIR
   std::string cmdline = "ground_eval";
   for (int i = 1; i < argc; ++i) cmdline += std::string(" ") + argv[i];
   for (int i = 1; i < argc; ++i) {
@@ -123,6 +237,10 @@ int main(int argc, char** argv) {
     };
     if (a == "--worlds") worlds = split(next());
     else if (a == "--method") methods = split(next());
+    else if (a == "--semantickitti") semantickitti_dir = next();
+    else if (a == "--frames") frame_range = next();
+    else if (a == "--sensor-height") sensor_height = std::strtof(next().c_str(), nullptr);
+    else if (a == "--compare-masks") mask_sources.push_back(next());
     else if (a == "--noise") noise_name = next();
     else if (a == "--scans") scans = std::atoi(next().c_str());
     else if (a == "--seed") seed = static_cast<uint32_t>(std::strtoul(next().c_str(), nullptr, 10));
@@ -149,6 +267,11 @@ int main(int argc, char** argv) {
       out << "usage: ground_eval [--worlds a,b] [--method m1,m2] "
              "[--noise datasheet|table4.1|none] [--scans N] [--seed S] [--classes] [--set key=value]... "
              "[--png-errors PREFIX] [--sick-scans N] [--at-ground-band M] [--height-bound] [--region-bound] [--region-seed-kept F] [--misses] [--markdown OUT]\n"
+             "       ground_eval --semantickitti DIR [--frames a:b] [--sensor-height M] [--method m1,m2] [--set key=value]... "
+             "[--compare-masks NAME=MASK_DIR]... [--png-errors PREFIX] [--markdown OUT]\n"
+             "  --semantickitti DIR: real labelled scans (DIR/velodyne/NNNNNN.bin, DIR/labels/NNNNNN.label) scored\n"
+             "    under protocols A and B, by class and by range; --compare-masks scores another program's\n"
+             "    MASK_DIR/NNNNNN.mask (one byte per return, 1 = ground) in the same run\n"
              "  worlds (default all):";
       for (const std::string& w : sim::standardWorldNames()) out << " " << w;
       out << "\n  methods (default all):";
@@ -167,6 +290,16 @@ int main(int argc, char** argv) {
   if (scans < 1 || sick_scans < 0) { std::cerr << "ground_eval: --scans must be >= 1, --sick-scans >= 0\n"; return 2; }
   // The table goes to stdout and, with --markdown, into `markdown` for OUT.
   std::string markdown;
+  if (!semantickitti_dir.empty()) {
+    if (!std::isfinite(sensor_height) || sensor_height <= 0.f) {
+      std::cerr << "ground_eval: --sensor-height must be positive\n";
+      return 2;
+    }
+    const int real_status = evaluateSemanticKitti(semantickitti_dir, frame_range, sensor_height, methods, sets,
+                                                  mask_sources, png_prefix, cmdline, &markdown);
+    if (real_status == 0 && !markdown_path.empty() && !writeTextFile(markdown_path, markdown)) return 1;
+    return real_status;
+  }
   auto emit = [&markdown](const char* fmt, ...) {
     char buf[1024];
     va_list args;
@@ -214,22 +347,8 @@ int main(int argc, char** argv) {
   std::vector<std::pair<std::string, MissBreakdown>> miss_rows;  // ("world | model", breakdown)
   for (const std::string& m : methods) {
     std::string error;
-    std::unique_ptr<GroundModel> model = makeGroundModel(m, &error);
+    std::unique_ptr<GroundModel> model = makeModel(m, sets, &error);
     if (!model) { std::cerr << "ground_eval: " << error << "\n"; return 2; }
-    if (!sets.empty()) {
-      auto* vs = dynamic_cast<VerticalScanGround*>(model.get());
-      if (!vs) { std::cerr << "ground_eval: --set applies to vertical scan models only\n"; return 2; }
-      VerticalScanParams params = vs->params();
-      for (const std::string& kv : sets) {
-        const std::size_t eq = kv.find('=');
-        if (eq == std::string::npos ||
-            !setVerticalScanParam(&params, kv.substr(0, eq), std::atof(kv.c_str() + eq + 1), &error)) {
-          std::cerr << "ground_eval: bad --set " << kv << " " << error << "\n";
-          return 2;
-        }
-      }
-      vs->setParams(params);
-    }
     TimedGroundModel timed(model.get());
     for (const std::string& w : worlds) {
       GroundAccuracy acc;
@@ -406,15 +525,6 @@ int main(int argc, char** argv) {
       std::fflush(stdout);
     }
   }
-  if (!markdown_path.empty()) {
-    const std::string tmp = markdown_path + ".tmp";
-    std::ofstream f(tmp);
-    f << markdown;
-    f.close();
-    if (!f || std::rename(tmp.c_str(), markdown_path.c_str()) != 0) {
-      std::cerr << "ground_eval: cannot write " << markdown_path << "\n";
-      return 1;
-    }
-  }
+  if (!markdown_path.empty() && !writeTextFile(markdown_path, markdown)) return 1;
   return status;
 }
