@@ -43,6 +43,9 @@ VerticalScanParams toVerticalScanParams(const VerticalScanGroundConfig& c) {
   p.neighbour_max_dr = static_cast<float>(c.neighbour_max_dr);
   p.neighbour_spacing_fraction = static_cast<float>(c.neighbour_spacing_fraction);
   p.neighbour_min_step = static_cast<float>(c.neighbour_min_step);
+  p.curb_policy = c.curb_policy == "ground" ? kCurbGround : kCurbObstacle;
+  p.curb_max_height = static_cast<float>(c.curb_max_height);
+  p.curb_max_depth = static_cast<float>(c.curb_max_depth);
   p.bend_ground_line = c.bend_ground_line;
   p.couple_columns = c.couple_columns;
   p.negative_obstacles = c.negative_obstacles;
@@ -88,6 +91,9 @@ void loadMethodSettings(const std::string& method, VerticalScanGroundConfig* c) 
   c->neighbour_max_dr = p.neighbour_max_dr;
   c->neighbour_spacing_fraction = p.neighbour_spacing_fraction;
   c->neighbour_min_step = p.neighbour_min_step;
+  c->curb_policy = p.curb_policy == kCurbGround ? "ground" : "obstacle";
+  c->curb_max_height = p.curb_max_height;
+  c->curb_max_depth = p.curb_max_depth;
   c->bend_ground_line = p.bend_ground_line;
   c->couple_columns = p.couple_columns;
   c->negative_obstacles = p.negative_obstacles;
@@ -134,6 +140,10 @@ sensor_msgs::PointCloud2ConstPtr VerticalScanGroundRos::lastClassified() const {
 
 std::unique_ptr<GroundModel> VerticalScanGroundRos::makeModel(const VerticalScanGroundConfig& config) {
   if (config.method == "default" || config.method == "thesis") {
+    if (config.curb_policy != "obstacle" && config.curb_policy != "ground") {
+      health_.error("bad parameter", "curb_policy '" + config.curb_policy +
+                                         "' is neither obstacle nor ground; curbs are obstacles");
+    }
     return makeVerticalScanModel(toVerticalScanParams(config));
   }
   // The thesis's baselines and the per-column Hough fit, with their own settings.

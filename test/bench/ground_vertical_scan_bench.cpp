@@ -6,7 +6,8 @@
 // Instruction count of one call (callgrind):
 //   valgrind --tool=callgrind --instr-atstart=no ground_vertical_scan_bench --callgrind-once FILE.bin
 // loads the file, warms nothing, and instruments exactly one classify call (--thesis: the thesis
-// mode; --bins: the default without laser_neighbours; --warm: after one uninstrumented call,
+// mode; --bins: the default without laser_neighbours; --curb-ground: the default with
+// curb_policy ground; --warm: after one uninstrumented call,
 // as in a running stream).
 // Output of one call for comparisons between builds:
 //   ground_vertical_scan_bench --dump FILE.bin OUT [--thesis|--bins]   (n label bytes, n floats)
@@ -28,12 +29,17 @@ using namespace ladar_perception;
 
 namespace {
 
-enum class Mode { kDefault, kThesis, kBins };
+enum class Mode { kDefault, kThesis, kBins, kCurbGround };
 
 VerticalScanParams paramsOf(Mode mode) {
   switch (mode) {
     case Mode::kThesis: return verticalScanThesisParams();
     case Mode::kBins: return verticalScanBinsParams();
+    case Mode::kCurbGround: {
+      VerticalScanParams p = verticalScanDefaultParams();
+      p.curb_policy = kCurbGround;
+      return p;
+    }
     default: return verticalScanDefaultParams();
   }
 }
@@ -43,6 +49,7 @@ Mode modeOf(int argc, char** argv, int from) {
   for (int a = from; a < argc; ++a) {
     if (std::strcmp(argv[a], "--thesis") == 0) mode = Mode::kThesis;
     if (std::strcmp(argv[a], "--bins") == 0) mode = Mode::kBins;
+    if (std::strcmp(argv[a], "--curb-ground") == 0) mode = Mode::kCurbGround;
   }
   return mode;
 }

@@ -646,9 +646,8 @@ TEST(VerticalScanModel, OccludedColumnBorrowsItsNeighboursGround) {
 struct CurbRingScan {
   std::vector<float> x, y, z;
   std::vector<uint8_t> face;  // 1 = on the curb face
-  static constexpr float kCurbH = 0.15f;
-  float kCurbR;
-  explicit CurbRingScan(float curb_r = 7.f) : kCurbR(curb_r) {
+  float kCurbR, kCurbH;
+  explicit CurbRingScan(float curb_r = 7.f, float curb_h = 0.15f) : kCurbR(curb_r), kCurbH(curb_h) {
     const std::vector<float>& el = hdl64eElevationsDeg();
     for (int ring_i = 0; ring_i < 64; ++ring_i) {
       const float e = el[ring_i] * kDeg;
@@ -706,7 +705,7 @@ void scoreCurbRing(const CurbRingScan& s, const VerticalScanParams& p, double* f
       ground_ok += out.labels[i] == kLabelGround;
     }
   }
-  ASSERT_GE(face_n, 1800u);
+  ASSERT_GE(face_n, 900u);
   *face_recall = static_cast<double>(face_ok) / face_n;
   *ground_recall = static_cast<double>(ground_ok) / ground_n;
 }
@@ -753,6 +752,32 @@ TEST(VerticalScanModel, FootOfACurbFaceBehindAKnot) {
     EXPECT_GT(ground, 0.95) << curb_r;
     EXPECT_GT(face, 0.3) << curb_r;
   }
+}
+
+TEST(VerticalScanModel, CurbPolicyGroundMakesACurbFaceGround) {
+  VerticalScanParams ground = verticalScanDefaultParams();
+  ASSERT_EQ(ground.curb_policy, kCurbObstacle);
+  std::string error;
+  ASSERT_TRUE(setVerticalScanParam(&ground, "curb_policy", kCurbGround, &error)) << error;
+  EXPECT_FALSE(setVerticalScanParam(&ground, "curb_policy", 2, &error));
+  EXPECT_EQ(ground.curb_policy, kCurbGround);
+  for (float curb_r : {6.f, 7.f, 9.f}) {
+    const CurbRingScan curb(curb_r);
+    double face = 0, rest = 0;
+    scoreCurbRing(curb, verticalScanDefaultParams(), &face, &rest);
+    EXPECT_GT(face, 0.95) << curb_r;  // kCurbObstacle, the default: the face is an obstacle
+    scoreCurbRing(curb, ground, &face, &rest);
+    EXPECT_LT(face, 0.05) << curb_r;  // kCurbGround: the face is ground ...
+    EXPECT_GT(rest, 0.99) << curb_r;  // ... and so are the road and the sidewalk beside it
+  }
+  // A 35 cm step, a low wall, stays an obstacle; so does a 15 cm curb with curb_max_height
+  // below it.
+  double face = 0, rest = 0;
+  scoreCurbRing(CurbRingScan(7.f, 0.35f), ground, &face, &rest);
+  EXPECT_GT(face, 0.95);
+  ground.curb_max_height = 0.1f;
+  scoreCurbRing(CurbRingScan(7.f), ground, &face, &rest);
+  EXPECT_GT(face, 0.95);
 }
 
 }  // namespace

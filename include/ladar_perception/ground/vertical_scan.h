@@ -16,6 +16,8 @@
 
 namespace ladar_perception {
 
+enum CurbPolicy : int { kCurbObstacle = 0, kCurbGround = 1 };
+
 struct VerticalScanParams {
   // --- Binning (3.3 step 1): rows by laser, columns by azimuth, median range per bin.
   float column_width_deg = 1.5f;          // azimuth width of a vertical scan [deg]
@@ -108,6 +110,15 @@ struct VerticalScanParams {
   //    2 * neighbour_max_dr of it in r.
   // Its P(obstacle) is then the neighbour's.
   bool laser_neighbours = false;
+  // Curbs (needs laser_neighbours). SemanticKITTI and most labelled data sets call a curb's
+  // face road or sidewalk; many planners want it as an obstacle. kCurbGround: a short face
+  // between two ground returns of one sub-column (ground in front, ground on top, the face's
+  // returns rising to the top by at most curb_max_height within curb_max_depth in r) is
+  // ground, and neither the top nor the foot of that face becomes an obstacle through its
+  // neighbours. kCurbObstacle: every face is an obstacle.
+  int curb_policy = 0;                       // kCurbObstacle = 0, kCurbGround = 1
+  float curb_max_height = 0.2f;              // [m]
+  float curb_max_depth = 0.5f;               // [m]
   int neighbour_cells_per_column = 8;
   float neighbour_max_dr = 0.05f;            // [m]
   float neighbour_spacing_fraction = 0.3f;   // [-]
@@ -273,6 +284,7 @@ class VerticalScanGround : public GroundModel {
   void fitColumns();
   void labelPoints(GroundClassification* out);
   void labelFromLaserNeighbours(float sensor_height, GroundClassification* out);
+  void relabelCurbFaces(float g_below, const uint8_t* mark, uint8_t stamp, GroundClassification* out);
 
   VerticalScanParams params_;
   std::string name_;
@@ -336,6 +348,8 @@ class VerticalScanGround : public GroundModel {
   uint8_t mark_stamp_ = 0;
   std::vector<float> row_gap_tan_;
   std::vector<std::pair<uint32_t, float>> neighbour_obstacles_;
+  // curb_policy kCurbGround: the curb faces' returns to relabel ground.
+  std::vector<uint32_t> curb_ground_;
 };
 
 }  // namespace ladar_perception
