@@ -28,6 +28,7 @@
 // other programs' ground masks scored in the same run.
 // --markdown also writes the table and the findings to OUT (for the README). Exit status 3 when a
 // finding checked is not reproduced (1: an evaluation failed, 2: bad arguments).
+#include <algorithm>
 #include <cmath>
 #include <cstdarg>
 #include <cstdio>
@@ -39,11 +40,15 @@
 #include <string>
 #include <vector>
 
+#include <dirent.h>
+
+#include "ladar_perception/eval/phantom_holes.h"
 #include "ladar_perception/eval/real_ground_eval.h"
 #include "ladar_perception/ground/ground_evaluation.h"
 #include "ladar_perception/ground/hough_evaluation.h"
 #include "ladar_perception/ground/vertical_scan.h"
 #include "ladar_perception/io/image.h"
+#include "ladar_perception/io/kitti.h"
 
 using namespace ladar_perception;
 
@@ -160,6 +165,117 @@ int evaluateSemanticKitti(const std::string& dir, const std::string& frame_range
   return 0;
 }
 
+
+// ground_eval --holes: negative obstacles scored per hole (evaluateHoles in ground_evaluation.h)
+// on the worlds with holes.
+int evaluateHoleTable(const std::vector<std::string>& worlds, const std::vector<std::string>& methods,
+                      const std::vector<std::string>& sets, sim::NoiseProfile noise, int scans, uint32_t seed,
+                      const std::string& cmdline, std::string* markdown) {
+  const HoleParams params;
+  std::string& out = *markdown;
+  char buf[512];
+  out += "`" + cmdline + "`\n\nA hole: pothole cells at least 25 cm across and 5 cm deep; counted in a scan "
+         "when within 30 m and at least one return lies inside it; found when one of them is called obstacle.\n\n"
+         "| world | method | noise | scans | holes | holes seen (hole x scan) | found | hole recall | "
+         "0-10 m | 10-20 m | 20-30 m | returns in holes called obstacle |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+  for (const std::string& w : worlds) {
+    for (const std::string& m : methods) {
+      std::string error;
+      std::unique_ptr<GroundModel> model = makeModel(m, sets, &error);
+      if (!model) { std::cerr << "ground_eval: " << error << "\n"; return 2; }
+      HoleScore score;
+      if (!evaluateHoles(w, model.get(), noise, scans, seed, params, &score, &error)) {
+        std::cerr << "ground_eval: " << error << "\n";
+        return 1;
+      }
+      if (score.holes == 0) continue;  // a world without holes
+      std::snprintf(buf, sizeof(buf), "| %s | %s | %s | %zu | %zu | %zu | %zu | %.2f%% |", w.c_str(), m.c_str(),
+                    sim::noiseProfileName(noise), score.scans, score.holes, score.seen, score.found,
+                    100.0 * score.recall());
+      out += buf;
+      for (int b = 0; b < 3; ++b) {
+        std::snprintf(buf, sizeof(buf), " %zu/%zu |", score.found_by_range[b], score.seen_by_range[b]);
+        out += buf;
+      }
+      std::snprintf(buf, sizeof(buf), " %.2f%% |\n",
+                    100.0 * GroundAccuracy::ratio(score.returns_called_obstacle, score.returns_in_holes));
+      out += buf;
+    }
+  }
+  std::fputs(out.c_str(), stdout);
+  return 0;
+}
+
+// ground_eval --phantom-holes DIR: the KITTI scans DIR/NNNNNN.bin through each method, and the
+// holes it reports where real road has none (eval/phantom_holes.h).
+int evaluatePhantomHoles(const std::string& dir, const std::string& frame_range, float sensor_height,
+                         const std::vector<std::string>& methods, const std::vector<std::string>& sets,
+                         const std::string& cmdline, std::string* markdown) {
+  long first = 0, last = -1;
+  if (!frame_range.empty() && !eval::parseFrameRange(frame_range, &first, &last)) {
+    std::cerr << "ground_eval: --frames takes a:b, a:, :b or a frame number\n";
+    return 2;
+  }
+  std::vector<std::string> names;
+  if (DIR* d = opendir(dir.c_str())) {
+    while (const dirent* e = readdir(d)) {
+      const std::string f = e->d_name;
+      if (f.size() != 10 || f.compare(6, 4, ".bin") != 0 ||
+          !std::all_of(f.begin(), f.begin() + 6, [](char c) { return c >= '0' && c <= '9'; }))
+        continue;
+      const long k = std::atol(f.substr(0, 6).c_str());
+      if (k >= first && (last < 0 || k <= last)) names.push_back(f.substr(0, 6));
+    }
+    closedir(d);
+  }
+  std::sort(names.begin(), names.end());
+  if (names.empty()) {
+    std::cerr << "ground_eval: no NNNNNN.bin scans in " << dir << "\n";
+    return 1;
+  }
+  std::vector<PackedCloud> clouds(names.size());
+  std::string error;
+  for (std::size_t k = 0; k < names.size(); ++k) {
+    if (!readKittiBin(dir + "/" + names[k] + ".bin", &clouds[k], &error)) {
+      std::cerr << "ground_eval: " << error << "\n";
+      return 1;
+    }
+  }
+  const eval::PhantomHoleParams params;
+  const SensorPose pose = SensorPose::fromHeight(sensor_height);
+  std::string& out = *markdown;
+  char buf[512];
+  out += "`" + cmdline + "`\n\nScans " + names.front() + "-" + names.back() + " of " + dir +
+         ". Obstacle returns within 30 m 5 cm to 1 m below the local ground (the lowest of the medians of "
+         "the model's ground returns in the 1 m cells of the 3 x 3 m around them), clustered in touching 0.25 m cells; a cluster of 2 or "
+         "more returns is a hole, a phantom when no obstacle return 20 cm or more above the ground lies "
+         "within 0.5 m (the foot of a car or a wall). A scan accounts for 60 m of road (30 m ahead and "
+         "behind).\n\n| method | scans | below-ground clusters | phantom holes | per scan | per 100 m of road | "
+         "deepest phantom [m] |\n|---|---|---|---|---|---|---|\n";
+  for (const std::string& m : methods) {
+    std::unique_ptr<GroundModel> model = makeModel(m, sets, &error);
+    if (!model) { std::cerr << "ground_eval: " << error << "\n"; return 2; }
+    GroundClassification result;
+    std::vector<eval::PhantomHole> phantoms;
+    std::size_t clusters = 0, phantom_count = 0;
+    float deepest = 0.f;
+    for (const PackedCloud& cloud : clouds) {
+      PointCloudView view;
+      if (!cloud.view(&view, &error)) { std::cerr << "ground_eval: " << error << "\n"; return 1; }
+      model->classify(view, pose, &result);
+      clusters += eval::findPhantomHoles(view, result, params, &phantoms);
+      phantom_count += phantoms.size();
+      for (const eval::PhantomHole& h : phantoms) deepest = std::max(deepest, h.depth);
+    }
+    const double scans = static_cast<double>(clouds.size());
+    std::snprintf(buf, sizeof(buf), "| %s | %zu | %zu | %zu | %.2f | %.2f | %.2f |\n", m.c_str(), clouds.size(),
+                  clusters, phantom_count, phantom_count / scans,
+                  100.0 * phantom_count / (scans * params.roadPerScan()), deepest);
+    out += buf;
+  }
+  std::fputs(out.c_str(), stdout);
+  return 0;
+}
 }  // namespace
 
 // Top-down picture of the middle scan of the evaluation: correct ground dark green, correct
@@ -227,6 +343,8 @@ int main(int argc, char** argv) {
   std::string semantickitti_dir, frame_range;  // --semantickitti DIR [--frames a:b]
   float sensor_height = 1.73f;                    // real scans: metres above the ground
   std::vector<std::string> mask_sources;          // --compare-masks NAME=MASK_DIR
+  bool holes = false;                             // --holes: the per-hole table
+  std::string phantom_dir;                        // --phantom-holes DIR (KITTI .bin scans)
   std::string cmdline = "ground_eval";
   for (int i = 1; i < argc; ++i) cmdline += std::string(" ") + argv[i];
   for (int i = 1; i < argc; ++i) {
@@ -241,6 +359,8 @@ int main(int argc, char** argv) {
     else if (a == "--frames") frame_range = next();
     else if (a == "--sensor-height") sensor_height = std::strtof(next().c_str(), nullptr);
     else if (a == "--compare-masks") mask_sources.push_back(next());
+    else if (a == "--holes") holes = true;
+    else if (a == "--phantom-holes") phantom_dir = next();
     else if (a == "--noise") noise_name = next();
     else if (a == "--scans") scans = std::atoi(next().c_str());
     else if (a == "--seed") seed = static_cast<uint32_t>(std::strtoul(next().c_str(), nullptr, 10));
@@ -269,9 +389,13 @@ int main(int argc, char** argv) {
              "[--png-errors PREFIX] [--sick-scans N] [--at-ground-band M] [--height-bound] [--region-bound] [--region-seed-kept F] [--misses] [--markdown OUT]\n"
              "       ground_eval --semantickitti DIR [--frames a:b] [--sensor-height M] [--method m1,m2] [--set key=value]... "
              "[--compare-masks NAME=MASK_DIR]... [--png-errors PREFIX] [--markdown OUT]\n"
+             "       ground_eval --holes [--worlds a,b] [--method m1,m2] [--noise N] [--scans N] [--seed S] [--markdown OUT]\n"
+             "       ground_eval --phantom-holes KITTI_DIR [--frames a:b] [--sensor-height M] [--method m1,m2] [--markdown OUT]\n"
              "  --semantickitti DIR: real labelled scans (DIR/velodyne/NNNNNN.bin, DIR/labels/NNNNNN.label) scored\n"
              "    under protocols A and B, by class and by range; --compare-masks scores another program's\n"
              "    MASK_DIR/NNNNNN.mask (one byte per return, 1 = ground) in the same run\n"
+             "  --holes: negative obstacles per hole (>= 25 cm across, >= 5 cm deep, within 30 m, in sight)\n"
+             "  --phantom-holes KITTI_DIR: holes reported on real road (clusters below the local ground, no object)\n"
              "  worlds (default all):";
       for (const std::string& w : sim::standardWorldNames()) out << " " << w;
       out << "\n  methods (default all):";
@@ -290,6 +414,15 @@ int main(int argc, char** argv) {
   if (scans < 1 || sick_scans < 0) { std::cerr << "ground_eval: --scans must be >= 1, --sick-scans >= 0\n"; return 2; }
   // The table goes to stdout and, with --markdown, into `markdown` for OUT.
   std::string markdown;
+  if (holes || !phantom_dir.empty()) {
+    const bool default_worlds = worlds == sim::standardWorldNames();
+    const int status =
+        holes ? evaluateHoleTable(default_worlds ? std::vector<std::string>{"potholes"} : worlds, methods, sets,
+                                  noise, scans, seed, cmdline, &markdown)
+              : evaluatePhantomHoles(phantom_dir, frame_range, sensor_height, methods, sets, cmdline, &markdown);
+    if (status == 0 && !markdown_path.empty() && !writeTextFile(markdown_path, markdown)) return 1;
+    return status;
+  }
   if (!semantickitti_dir.empty()) {
     if (!std::isfinite(sensor_height) || sensor_height <= 0.f) {
       std::cerr << "ground_eval: --sensor-height must be positive\n";

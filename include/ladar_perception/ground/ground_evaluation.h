@@ -494,4 +494,144 @@ inline bool regionModelBound(const std::string& world_name, sim::NoiseProfile no
   return true;
 }
 
+// Negative obstacles scored per hole, the way a user means "found the pothole": a hole is a
+// 4-connected set of pothole cells of the world at least min_across wide in x and in y and at
+// least min_depth below the median of the ground cells around it. In a scan a hole counts when
+// its centre lies within max_range of the sensor horizontally and at least one return falls
+// inside it (it is in line of sight); it is found when one of those returns is called an
+// obstacle.
+struct WorldHole {
+  Eigen::Vector2d centre;
+  double across = 0.0, depth = 0.0;  // [m]: the smaller of its x and y extents; its depth
+  std::vector<std::size_t> cells;    // World::index()
+};
+
+struct HoleParams {
+  double min_across = 0.25, min_depth = 0.05, max_range = 30.0;  // [m]
+};
+
+struct HoleScore {
+  std::size_t scans = 0;
+  std::size_t holes = 0;                 // holes in the world passing the size and depth tests
+  std::size_t seen = 0, found = 0;       // (hole, scan) pairs in range and line of sight
+  std::size_t returns_in_holes = 0, returns_called_obstacle = 0;
+  // By the hole's horizontal range: below 10 m, 10-20 m, 20 m and beyond.
+  std::array<std::size_t, 3> seen_by_range{}, found_by_range{};
+  double recall() const { return GroundAccuracy::ratio(found, seen); }
+};
+
+inline std::vector<WorldHole> worldHoles(const sim::World& world, const HoleParams& params,
+                                         std::vector<int>* cell_hole) {
+  const int nx = world.cellsX(), ny = world.cellsY();
+  const double res = world.resolution();
+  cell_hole->assign(static_cast<std::size_t>(nx) * ny, -1);
+  std::vector<uint8_t> seen(cell_hole->size(), 0);
+  std::vector<WorldHole> holes;
+  std::vector<std::pair<int, int>> stack;
+  std::vector<float> rim;
+  for (int y0 = 0; y0 < ny; ++y0) {
+    for (int x0 = 0; x0 < nx; ++x0) {
+      if (seen[world.index(x0, y0)] || world.cellClass(x0, y0) != sim::SurfaceClass::kPothole) continue;
+      WorldHole hole;
+      int min_x = x0, max_x = x0, min_y = y0, max_y = y0;
+      float lowest = world.cellHeight(x0, y0);
+      rim.clear();
+      stack.assign(1, {x0, y0});
+      seen[world.index(x0, y0)] = 1;
+      while (!stack.empty()) {
+        const auto [x, y] = stack.back();
+        stack.pop_back();
+        hole.cells.push_back(world.index(x, y));
+        min_x = std::min(min_x, x), max_x = std::max(max_x, x);
+        min_y = std::min(min_y, y), max_y = std::max(max_y, y);
+        lowest = std::min(lowest, world.cellHeight(x, y));
+        const int d[4][2] = {{1, 0}, {-1, 0}, {0, 1}, {0, -1}};
+        for (const auto& dd : d) {
+          const int qx = x + dd[0], qy = y + dd[1];
+          if (!world.validCell(qx, qy)) continue;
+          const std::size_t q = world.index(qx, qy);
+          if (world.cellClass(qx, qy) == sim::SurfaceClass::kPothole) {
+            if (!seen[q]) {
+              seen[q] = 1;
+              stack.emplace_back(qx, qy);
+            }
+          } else if (sim::isGroundClass(world.cellClass(qx, qy))) {
+            rim.push_back(world.cellHeight(qx, qy));
+          }
+        }
+      }
+      if (rim.empty()) continue;
+      std::nth_element(rim.begin(), rim.begin() + static_cast<std::ptrdiff_t>(rim.size() / 2), rim.end());
+      hole.depth = rim[rim.size() / 2] - lowest;
+      hole.across = std::min(max_x - min_x + 1, max_y - min_y + 1) * res;
+      hole.centre = Eigen::Vector2d(world.originX() + (min_x + max_x + 1) * 0.5 * res,
+                                    world.originY() + (min_y + max_y + 1) * 0.5 * res);
+      if (hole.across < params.min_across - 1e-9 || hole.depth < params.min_depth - 1e-6) continue;
+      for (const std::size_t c : hole.cells) (*cell_hole)[c] = static_cast<int>(holes.size());
+      holes.push_back(std::move(hole));
+    }
+  }
+  return holes;
+}
+
+// The hole a world point lies in (a return on a hole's wall may sit on the cell border: the
+// four neighbour cells are tried too), or -1.
+inline int holeAt(const sim::World& world, const std::vector<int>& cell_hole, const Eigen::Vector3d& p) {
+  const int cx = world.cellX(p.x()), cy = world.cellY(p.y());
+  const int d[5][2] = {{0, 0}, {1, 0}, {-1, 0}, {0, 1}, {0, -1}};
+  for (const auto& dd : d) {
+    if (world.validCell(cx + dd[0], cy + dd[1])) {
+      const int h = cell_hole[world.index(cx + dd[0], cy + dd[1])];
+      if (h >= 0) return h;
+    }
+  }
+  return -1;
+}
+
+inline bool evaluateHoles(const std::string& world_name, GroundModel* model, sim::NoiseProfile noise,
+                          int scans, uint32_t seed, const HoleParams& params, HoleScore* score,
+                          std::string* error) {
+  SensorPose pose;
+  pose.sensor_to_ground = evaluationSensorMount().cast<float>();
+  GroundClassification result;
+  std::vector<WorldHole> holes;
+  std::vector<int> cell_hole;
+  std::vector<int> in_sight, called;
+  return forEachEvaluationScan(
+      world_name, noise, scans, seed, error,
+      [&](const sim::World& world, const Eigen::Isometry3d& sensor, const PointCloudView& view,
+          const std::vector<uint8_t>& truth) {
+        if (score->scans == 0) {
+          holes = worldHoles(world, params, &cell_hole);
+          score->holes = holes.size();
+        }
+        ++score->scans;
+        model->classify(view, pose, &result);
+        in_sight.assign(holes.size(), 0);
+        called.assign(holes.size(), 0);
+        for (std::size_t i = 0; i < truth.size() && i < view.size(); ++i) {
+          if (static_cast<sim::SurfaceClass>(truth[i]) != sim::SurfaceClass::kPothole) continue;
+          const Eigen::Vector3f q = view.xyz(i);
+          if (!q.allFinite()) continue;
+          const int h = holeAt(world, cell_hole, sensor * q.cast<double>());
+          if (h < 0) continue;
+          ++in_sight[h];
+          ++score->returns_in_holes;
+          if (result.labels[i] == kLabelObstacle) {
+            ++called[h];
+            ++score->returns_called_obstacle;
+          }
+        }
+        const Eigen::Vector2d sensor_xy = sensor.translation().head<2>();
+        for (std::size_t h = 0; h < holes.size(); ++h) {
+          if (!in_sight[h] || (holes[h].centre - sensor_xy).norm() > params.max_range) continue;
+          ++score->seen;
+          score->found += called[h] > 0;
+          const int band = std::min(2, static_cast<int>((holes[h].centre - sensor_xy).norm() / 10.0));
+          ++score->seen_by_range[band];
+          score->found_by_range[band] += called[h] > 0;
+        }
+      });
+}
+
 }  // namespace ladar_perception
