@@ -35,6 +35,7 @@
 #include <cstdlib>
 #include <fstream>
 #include <iostream>
+#include <iterator>
 #include <map>
 #include <sstream>
 #include <string>
@@ -210,7 +211,8 @@ int evaluateHoleTable(const std::vector<std::string>& worlds, const std::vector<
 // holes it reports where real road has none (eval/phantom_holes.h).
 int evaluatePhantomHoles(const std::string& dir, const std::string& frame_range, float sensor_height,
                          const std::vector<std::string>& methods, const std::vector<std::string>& sets,
-                         const std::string& cmdline, std::string* markdown) {
+                         const std::vector<std::string>& mask_sources, const std::string& cmdline,
+                         std::string* markdown) {
   long first = 0, last = -1;
   if (!frame_range.empty() && !eval::parseFrameRange(frame_range, &first, &last)) {
     std::cerr << "ground_eval: --frames takes a:b, a:, :b or a frame number\n";
@@ -252,17 +254,47 @@ int evaluatePhantomHoles(const std::string& dir, const std::string& frame_range,
          "within 0.5 m (the foot of a car or a wall). A scan accounts for 60 m of road (30 m ahead and "
          "behind).\n\n| method | scans | below-ground clusters | phantom holes | per scan | per 100 m of road | "
          "deepest phantom [m] |\n|---|---|---|---|---|---|---|\n";
-  for (const std::string& m : methods) {
-    std::unique_ptr<GroundModel> model = makeModel(m, sets, &error);
-    if (!model) { std::cerr << "ground_eval: " << error << "\n"; return 2; }
+  // The methods, then other programs' masks (1 = ground; anything else is taken as obstacle).
+  const std::size_t rows = methods.size() + mask_sources.size();
+  for (std::size_t row = 0; row < rows; ++row) {
+    std::unique_ptr<GroundModel> model;
+    std::string m, mask_dir;
+    if (row < methods.size()) {
+      m = methods[row];
+      model = makeModel(m, sets, &error);
+      if (!model) { std::cerr << "ground_eval: " << error << "\n"; return 2; }
+    } else {
+      const std::string& source = mask_sources[row - methods.size()];
+      const std::size_t eq = source.find('=');
+      if (eq == std::string::npos || eq == 0 || eq + 1 == source.size()) {
+        std::cerr << "ground_eval: --compare-masks takes NAME=MASK_DIR\n";
+        return 2;
+      }
+      m = source.substr(0, eq);
+      mask_dir = source.substr(eq + 1);
+    }
     GroundClassification result;
     std::vector<eval::PhantomHole> phantoms;
     std::size_t clusters = 0, phantom_count = 0;
     float deepest = 0.f;
-    for (const PackedCloud& cloud : clouds) {
+    for (std::size_t k = 0; k < clouds.size(); ++k) {
       PointCloudView view;
-      if (!cloud.view(&view, &error)) { std::cerr << "ground_eval: " << error << "\n"; return 1; }
-      model->classify(view, pose, &result);
+      if (!clouds[k].view(&view, &error)) { std::cerr << "ground_eval: " << error << "\n"; return 1; }
+      if (model) {
+        model->classify(view, pose, &result);
+      } else {
+        std::ifstream in(mask_dir + "/" + names[k] + ".mask", std::ios::binary);
+        std::vector<char> mask((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+        if (mask.size() != view.size()) {
+          std::cerr << "ground_eval: " << mask_dir << "/" << names[k] << ".mask: missing or not one byte per return\n";
+          return 1;
+        }
+        result.resize(view.size());
+        for (std::size_t i = 0; i < view.size(); ++i) {
+          result.labels[i] = mask[i] == 1 ? kLabelGround : kLabelObstacle;
+          result.p_obstacle[i] = mask[i] == 1 ? 0.f : 1.f;
+        }
+      }
       clusters += eval::findPhantomHoles(view, result, params, &phantoms);
       phantom_count += phantoms.size();
       for (const eval::PhantomHole& h : phantoms) deepest = std::max(deepest, h.depth);
@@ -390,7 +422,8 @@ int main(int argc, char** argv) {
              "       ground_eval --semantickitti DIR [--frames a:b] [--sensor-height M] [--method m1,m2] [--set key=value]... "
              "[--compare-masks NAME=MASK_DIR]... [--png-errors PREFIX] [--markdown OUT]\n"
              "       ground_eval --holes [--worlds a,b] [--method m1,m2] [--noise N] [--scans N] [--seed S] [--markdown OUT]\n"
-             "       ground_eval --phantom-holes KITTI_DIR [--frames a:b] [--sensor-height M] [--method m1,m2] [--markdown OUT]\n"
+             "       ground_eval --phantom-holes KITTI_DIR [--frames a:b] [--sensor-height M] [--method m1,m2] "
+             "[--compare-masks NAME=MASK_DIR]... [--markdown OUT]\n"
              "  --semantickitti DIR: real labelled scans (DIR/velodyne/NNNNNN.bin, DIR/labels/NNNNNN.label) scored\n"
              "    under protocols A and B, by class and by range; --compare-masks scores another program's\n"
              "    MASK_DIR/NNNNNN.mask (one byte per return, 1 = ground) in the same run\n"
@@ -419,7 +452,8 @@ int main(int argc, char** argv) {
     const int status =
         holes ? evaluateHoleTable(default_worlds ? std::vector<std::string>{"potholes"} : worlds, methods, sets,
                                   noise, scans, seed, cmdline, &markdown)
-              : evaluatePhantomHoles(phantom_dir, frame_range, sensor_height, methods, sets, cmdline, &markdown);
+              : evaluatePhantomHoles(phantom_dir, frame_range, sensor_height, methods, sets, mask_sources, cmdline,
+                                     &markdown);
     if (status == 0 && !markdown_path.empty() && !writeTextFile(markdown_path, markdown)) return 1;
     return status;
   }
