@@ -34,7 +34,9 @@ namespace ladar_perception {
 
 namespace {
 
-#if defined(__GNUC__)
+// GCC's attribute on lambdas (clang rejects it after `mutable`, and inlines these lambdas
+// without it).
+#if defined(__GNUC__) && !defined(__clang__)
 #define LADAR_ALWAYS_INLINE __attribute__((always_inline))
 #else
 #define LADAR_ALWAYS_INLINE
