@@ -92,30 +92,35 @@ bool scoreGroundModel(GroundModel* model, const std::vector<LabelledFrame>& fram
   return true;
 }
 
+bool readGroundMask(const std::string& path, std::size_t points, std::vector<uint8_t>* mask,
+                    std::string* error) {
+  std::ifstream in(path, std::ios::binary | std::ios::ate);
+  if (!in) {
+    *error = "cannot open " + path;
+    return false;
+  }
+  const std::streamsize bytes = in.tellg();
+  if (bytes < 0 || static_cast<std::size_t>(bytes) != points) {
+    *error = path + ": " + std::to_string(bytes < 0 ? 0 : bytes) + " bytes for a scan of " +
+             std::to_string(points) + " returns (one byte per return)";
+    return false;
+  }
+  in.seekg(0);
+  mask->resize(points);
+  if (!in.read(reinterpret_cast<char*>(mask->data()), bytes)) {
+    *error = path + ": read failed";
+    return false;
+  }
+  return true;
+}
+
 bool scoreMaskFiles(const std::string& name, const std::string& mask_dir,
                     const std::vector<LabelledFrame>& frames, float sensor_height,
                     MethodScore* score, std::string* error) {
   score->method = name;
   std::vector<uint8_t> called;
   for (const LabelledFrame& frame : frames) {
-    const std::string path = mask_dir + "/" + frame.name + ".mask";
-    std::ifstream in(path, std::ios::binary | std::ios::ate);
-    if (!in) {
-      *error = "cannot open " + path;
-      return false;
-    }
-    const std::streamsize bytes = in.tellg();
-    if (bytes < 0 || static_cast<std::size_t>(bytes) != frame.cloud.size()) {
-      *error = path + ": " + std::to_string(bytes < 0 ? 0 : bytes) + " bytes for a scan of " +
-               std::to_string(frame.cloud.size()) + " returns (one byte per return)";
-      return false;
-    }
-    in.seekg(0);
-    called.resize(frame.cloud.size());
-    if (!in.read(reinterpret_cast<char*>(called.data()), bytes)) {
-      *error = path + ": read failed";
-      return false;
-    }
+    if (!readGroundMask(mask_dir + "/" + frame.name + ".mask", frame.cloud.size(), &called, error)) return false;
     PointCloudView view;
     if (!frame.cloud.view(&view, error)) return false;
     addFrameScore(frame, view, called, sensor_height, score);

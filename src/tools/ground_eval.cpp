@@ -35,7 +35,6 @@
 #include <cstdlib>
 #include <fstream>
 #include <iostream>
-#include <iterator>
 #include <map>
 #include <sstream>
 #include <string>
@@ -274,6 +273,7 @@ int evaluatePhantomHoles(const std::string& dir, const std::string& frame_range,
       mask_dir = source.substr(eq + 1);
     }
     GroundClassification result;
+    std::vector<uint8_t> mask;
     std::vector<eval::PhantomHole> phantoms;
     std::size_t clusters = 0, phantom_count = 0;
     float deepest = 0.f;
@@ -283,10 +283,8 @@ int evaluatePhantomHoles(const std::string& dir, const std::string& frame_range,
       if (model) {
         model->classify(view, pose, &result);
       } else {
-        std::ifstream in(mask_dir + "/" + names[k] + ".mask", std::ios::binary);
-        std::vector<char> mask((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-        if (mask.size() != view.size()) {
-          std::cerr << "ground_eval: " << mask_dir << "/" << names[k] << ".mask: missing or not one byte per return\n";
+        if (!eval::readGroundMask(mask_dir + "/" + names[k] + ".mask", view.size(), &mask, &error)) {
+          std::cerr << "ground_eval: " << error << "\n";
           return 1;
         }
         result.resize(view.size());

@@ -49,6 +49,12 @@ bool scoreGroundModel(GroundModel* model, const std::vector<LabelledFrame>& fram
                       const SensorPose& pose, MethodScore* score, std::string* error,
                       std::vector<std::vector<uint8_t>>* per_frame_called = nullptr);
 
+// Reads a ground mask file (one byte per return, 1 = ground, the format of ground_segment
+// --mask) of a scan of `points` returns; false with a reason when it is missing or its size
+// does not match.
+bool readGroundMask(const std::string& path, std::size_t points, std::vector<uint8_t>* mask,
+                    std::string* error);
+
 // Scores masks written by another program (one byte per return, 1 = ground, the format of
 // ground_segment --mask): MASK_DIR/NNNNNN.mask for each frame. False with a reason when a mask
 // is missing or its size does not match the frame.
