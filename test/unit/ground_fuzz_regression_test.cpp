@@ -3,12 +3,7 @@
 // points scripts/fuzz builds with libFuzzer. Under scripts/test's AddressSanitizer +
 // UndefinedBehaviorSanitizer pass a regression shows as a sanitizer abort; in a plain build the
 // targets' own checks (labels per point, an error message for every rejection) still trap.
-#include <dirent.h>
-
-#include <fstream>
-#include <iterator>
 #include <string>
-#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -21,43 +16,9 @@
 #define LADAR_FUZZ_ENTRY ladarFuzzConfigFiles
 #include "../fuzz/fuzz_config_files.cpp"
 #undef LADAR_FUZZ_ENTRY
+#include "../fuzz/fuzz_replay.h"
 
-namespace {
-
-using Entry = int (*)(const uint8_t*, size_t);
-
-std::vector<std::string> filesIn(const std::string& dir) {
-  std::vector<std::string> out;
-  if (DIR* d = opendir(dir.c_str())) {
-    while (dirent* e = readdir(d)) {
-      const std::string name = e->d_name;
-      if (name != "." && name != "..") out.push_back(dir + "/" + name);
-    }
-    closedir(d);
-  }
-  return out;
-}
-
-// Runs every file of the target's corpus and regressions; returns how many were replayed.
-int replay(const std::string& target, Entry entry, bool need_regressions) {
-  const std::string root = std::string(LADAR_SOURCE_DIR) + "/test/fuzz/";
-  std::vector<std::string> files = filesIn(root + "corpus/" + target);
-  const std::vector<std::string> regressions = filesIn(root + "regressions/" + target);
-  if (need_regressions) {
-    EXPECT_FALSE(regressions.empty()) << target;
-  }
-  files.insert(files.end(), regressions.begin(), regressions.end());
-  for (const std::string& f : files) {
-    std::ifstream in(f, std::ios::binary);
-    const std::vector<uint8_t> bytes((std::istreambuf_iterator<char>(in)),
-                                     std::istreambuf_iterator<char>());
-    SCOPED_TRACE(f);
-    EXPECT_EQ(0, entry(bytes.data(), bytes.size()));
-  }
-  return static_cast<int>(files.size());
-}
-
-}  // namespace
+using ladar_perception::fuzz::replay;
 
 TEST(FuzzRegression, PointCloudIntoEveryGroundModel) {
   EXPECT_GE(replay("fuzz_point_cloud", &ladarFuzzPointCloud, true), 3);
