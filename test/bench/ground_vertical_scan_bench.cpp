@@ -7,10 +7,11 @@
 //   valgrind --tool=callgrind --instr-atstart=no ground_vertical_scan_bench --callgrind-once FILE.bin
 // loads the file, warms nothing, and instruments exactly one classify call (--thesis: the thesis
 // mode; --bins: the default without laser_neighbours; --curb-ground: the default with
-// curb_policy ground; --warm: after one uninstrumented call,
+// curb_policy ground; --local-ground: the default with local_ground; --warm: after one uninstrumented call,
 // as in a running stream).
 // Output of one call for comparisons between builds:
-//   ground_vertical_scan_bench --dump FILE.bin OUT [--thesis|--bins]   (n label bytes, n floats)
+//   ground_vertical_scan_bench --dump FILE.bin OUT [--thesis|--bins|--curb-ground|--local-ground]
+//   (n label bytes, n floats)
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -29,7 +30,7 @@ using namespace ladar_perception;
 
 namespace {
 
-enum class Mode { kDefault, kThesis, kBins, kCurbGround };
+enum class Mode { kDefault, kThesis, kBins, kCurbGround, kLocalGround };
 
 VerticalScanParams paramsOf(Mode mode) {
   switch (mode) {
@@ -38,6 +39,11 @@ VerticalScanParams paramsOf(Mode mode) {
     case Mode::kCurbGround: {
       VerticalScanParams p = verticalScanDefaultParams();
       p.curb_policy = kCurbGround;
+      return p;
+    }
+    case Mode::kLocalGround: {
+      VerticalScanParams p = verticalScanDefaultParams();
+      p.local_ground = true;
       return p;
     }
     default: return verticalScanDefaultParams();
@@ -50,6 +56,7 @@ Mode modeOf(int argc, char** argv, int from) {
     if (std::strcmp(argv[a], "--thesis") == 0) mode = Mode::kThesis;
     if (std::strcmp(argv[a], "--bins") == 0) mode = Mode::kBins;
     if (std::strcmp(argv[a], "--curb-ground") == 0) mode = Mode::kCurbGround;
+    if (std::strcmp(argv[a], "--local-ground") == 0) mode = Mode::kLocalGround;
   }
   return mode;
 }
@@ -175,6 +182,9 @@ int main(int argc, char** argv) {
       ->Unit(benchmark::kMillisecond);
   benchmark::RegisterBenchmark("VerticalScanBins/kitti/000000.bin",
                                [](benchmark::State& s) { BM_Kitti(s, "000000.bin", Mode::kBins); })
+      ->Unit(benchmark::kMillisecond);
+  benchmark::RegisterBenchmark("VerticalScanLocalGround/kitti/000000.bin",
+                               [](benchmark::State& s) { BM_Kitti(s, "000000.bin", Mode::kLocalGround); })
       ->Unit(benchmark::kMillisecond);
   benchmark::RegisterBenchmark("VerticalScan/simulated_urban",
                                [](benchmark::State& s) { BM_SimulatedUrban(s, Mode::kDefault); })
