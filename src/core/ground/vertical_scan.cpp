@@ -1,6 +1,8 @@
 // Vertical scan ground extraction (thesis 3.3; equations restated in algorithms.md).
 #include "ladar_perception/ground/vertical_scan.h"
 
+#include "label_scan.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -1746,19 +1748,7 @@ LADAR_HOT_PATH void VerticalScanGround::labelFromLaserNeighbours(float sensor_he
       mark_below[c] = stamp;
       mark_above[c] = stamp;
     };
-    std::size_t j = 0;
-#if defined(__SSE2__)
-    const __m128i v_obstacle = _mm_set1_epi8(static_cast<char>(kLabelObstacle));
-    for (; j + 16 <= n; j += 16) {
-      const __m128i l16 = _mm_loadu_si128(reinterpret_cast<const __m128i*>(labels + j));
-      for (unsigned o = static_cast<unsigned>(_mm_movemask_epi8(_mm_cmpeq_epi8(l16, v_obstacle))); o; o &= o - 1) {
-        mark_around(j + static_cast<std::size_t>(__builtin_ctz(o)));
-      }
-    }
-#endif
-    for (; j < n; ++j) {
-      if (labels[j] == kLabelObstacle) mark_around(j);
-    }
+    vertical_scan::forEachLabelled(labels, n, kLabelObstacle, mark_around);
     const uint32_t* groups = deep_groups_.data();
     for (std::size_t g = 0; g < deep_count_; ++g) {
       const std::size_t group = static_cast<std::size_t>(groups[g] >> 4) * 4;
@@ -1862,20 +1852,7 @@ LADAR_HOT_PATH void VerticalScanGround::relabelCurbFaces(float g_below, const ui
     if (j < n && labels[j] == kLabelObstacle && hh[q] >= hh[j] + step) tops_curb(c, row, rr[q], hh[q], j);
   };
   curb_ground_.clear();
-  std::size_t i = 0;
-#if defined(__SSE2__)
-  static_assert(kLabelGround == 0, "the ground scan assumes ground = 0");
-  for (; i + 16 <= n; i += 16) {  // 16 labels at a time
-    const __m128i l16 = _mm_loadu_si128(reinterpret_cast<const __m128i*>(labels + i));
-    for (unsigned g = static_cast<unsigned>(_mm_movemask_epi8(_mm_cmpeq_epi8(l16, _mm_setzero_si128()))); g;
-         g &= g - 1) {
-      test(i + static_cast<std::size_t>(__builtin_ctz(g)));
-    }
-  }
-#endif
-  for (; i < n; ++i) {
-    if (labels[i] == kLabelGround) test(i);
-  }
+  vertical_scan::forEachLabelled(labels, n, kLabelGround, test);
   for (const uint32_t j : curb_ground_) {
     labels[j] = kLabelGround;
     out->p_obstacle[j] = p.tolerances.obstacle_threshold;

@@ -5,35 +5,12 @@
 #include <cmath>
 #include <cstdint>
 
-#if defined(__SSE2__)
-#include <emmintrin.h>
-#endif
-
 #include "ladar_perception/ground/vertical_scan.h"
+#include "label_scan.h"
 
 namespace ladar_perception {
 
-namespace {
-
-// Calls f(i) for every i < n with labels[i] == label, 16 labels at a time where it can.
-template <typename F>
-inline void forEachLabelled(const uint8_t* labels, std::size_t n, uint8_t label, F&& f) {
-  std::size_t i = 0;
-#if defined(__SSE2__)
-  const __m128i v_label = _mm_set1_epi8(static_cast<char>(label));
-  for (; i + 16 <= n; i += 16) {
-    const __m128i l16 = _mm_loadu_si128(reinterpret_cast<const __m128i*>(labels + i));
-    for (unsigned m = static_cast<unsigned>(_mm_movemask_epi8(_mm_cmpeq_epi8(l16, v_label))); m; m &= m - 1) {
-      f(i + static_cast<std::size_t>(__builtin_ctz(m)));
-    }
-  }
-#endif
-  for (; i < n; ++i) {
-    if (labels[i] == label) f(i);
-  }
-}
-
-}  // namespace
+using vertical_scan::forEachLabelled;
 
 // Runs after labelFromLaserNeighbours() (its face test reads the range image binPoints() wrote).
 void VerticalScanGround::relabelFromLocalGround(GroundClassification* out) {
