@@ -136,7 +136,7 @@ struct VerticalScanParams {
   // flat ground (rough grass, kerbside parking, the sidewalk) that the per-column terms call
   // obstacle on real scans, and with it curb faces lower than local_ground_face_height (as
   // labelled data sets call them) and returns of shallow holes within local_ground_below of
-  // the ground around them. Costs about 3.6 M instructions per 124,000-return scan.
+  // the ground around them. Costs about 3.5 M instructions per 124,000-return scan.
   bool local_ground = false;
   float local_ground_cell = 1.0f;            // [m]
   int local_ground_columns = 1;

@@ -311,7 +311,7 @@ VerticalScanParams verticalScanDefaultParams() {
   p.laser_neighbours = true;
   // The local ground height stays off here: on real scans (SemanticKITTI 00, frames 0-2,
   // protocol A) it takes precision / recall / F1 from 99.12 / 97.48 / 98.30 % to 98.99 / 98.78 /
-  // 98.88 %, but it costs 3.6 M instructions per KITTI scan (17.7 -> 21.4 M), calls the curb
+  // 98.88 %, but it costs 3.5 M instructions per KITTI scan (17.8 -> 21.3 M), calls the curb
   // faces that the simulator's truth and curb_policy obstacle call obstacles ground (urban
   // ground precision 99.21 -> 98.09 %, 4 scans), and finds one hole fewer of 105 (see README).
   p.local_ground = false;
