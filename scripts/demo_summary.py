@@ -16,6 +16,7 @@ def main():
     p.add_argument("summary")
     p.add_argument("benchmark")
     p.add_argument("--run-seconds", type=float, default=float("nan"))
+    p.add_argument("--noise", default="datasheet")
     a = p.parse_args()
     with open(a.summary) as f:
         s = json.load(f)
@@ -57,11 +58,17 @@ def main():
 
     w = max(len(r[0]) for r in rows) + 2
     line = "-" * (w + 28)
+    noise = {"datasheet": "datasheet range noise (HDL-64E 2 cm, as on the road)",
+             "table4.1": "the thesis's Table 4.1 noise (Velodyne 0.2 m): a stress case, not the road",
+             "none": "no range noise"}.get(a.noise, a.noise + " noise")
     print(line)
     print("ladar_perception demo: the urban world against the simulator's truth")
+    print("at " + noise)
     print(line)
     for name, value in rows:
         print(name.ljust(w) + value)
+    print(line)
+    print("On real HDL-64E scans (SemanticKITTI, labelled): see doc/benchmarks.md")
     print(line)
     missing = v["scans"] == 0 or h["valid_fits"] == 0 or not s["processing_ms"]
     return 1 if missing else 0

@@ -17,9 +17,11 @@ AdapterDiagnostics::AdapterDiagnostics(ros::NodeHandle nh, ros::NodeHandle priva
     updater_.add(*rate_);
   }
   updater_.add(task_name, [this](diagnostic_updater::DiagnosticStatusWrapper& s) { task_(s); });
-  timer_ = private_nh.createTimer(ros::Duration(1.0), [this, name](const ros::TimerEvent&) {
+  // A wall-clock timer: on a played bag (use_sim_time) a timer on ROS time fires only as
+  // bag time passes, so a bag shorter than a second never published a processing time.
+  timer_ = private_nh.createWallTimer(ros::WallDuration(1.0), [this, name](const ros::WallTimerEvent&) {
     try {
-      updater_.update();
+      updater_.force_update();
     } catch (const std::exception& e) {
       ROS_ERROR_THROTTLE(10.0, "%s: diagnostics update failed: %s", name.c_str(), e.what());
     }

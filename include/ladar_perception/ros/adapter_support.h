@@ -3,7 +3,7 @@
 //    directly when tf is off), with the filter's drops reported to InputHealth and every
 //    callback guarded so no exception reaches the nodelet manager;
 //  - AdapterDiagnostics: a diagnostic_updater with the input-rate check and the adapter's own
-//    status task, updated at 1 Hz from a timer;
+//    status task, published at 1 Hz of wall-clock time (also on a short bag at sim time);
 //  - MethodReconfigure<Config>: the dynamic_reconfigure server, with named methods: at start-up
 //    the method's settings are loaded except the thresholds given explicitly as parameters;
 //    choosing another method later loads that method's settings into every threshold; the
@@ -113,7 +113,7 @@ class AdapterDiagnostics {
   double rate_min_, rate_max_;
   std::unique_ptr<diagnostic_updater::FrequencyStatus> rate_;
   Task task_;
-  ros::Timer timer_;
+  ros::WallTimer timer_;
 };
 
 template <typename Config>
