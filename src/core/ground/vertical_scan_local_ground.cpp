@@ -30,8 +30,9 @@ void VerticalScanGround::relabelFromLocalGround(GroundClassification* out) {
   const int last_ring = rings - 1;
   const std::size_t cells = static_cast<std::size_t>(rings) * cols;
   // (sum of heights, count) of the ground returns per cell, ring-major: cell = ring * cols +
-  // column. A return falls in the cell of its bin's representative (3.3 step 1): the returns
-  // of a bin, one laser across one column, mostly lie within a cell of it in r.
+  // column. The obstacle returns are tested against the cell of their bin's representative
+  // (3.3 step 1; bin_cell): the returns of a bin, one laser across one column, mostly lie
+  // within a cell of it in r.
   float* __restrict grid = local_grid_.data();
   std::fill(grid, grid + 2 * cells, 0.f);
   const std::size_t bin_count = static_cast<std::size_t>(cols) << shift;
