@@ -1,6 +1,7 @@
 #include "ladar_perception/ros/latency_monitor.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <sstream>
@@ -39,14 +40,48 @@ std::string quoted(const std::string& s) {
   return out + "\"";
 }
 
-std::string stats(const std::vector<float>& v) {
+std::string stats(const LatencyHistogram& h) {
   std::ostringstream s;
-  s << "{\"p50\": " << percentile(v, 50) << ", \"p99\": " << percentile(v, 99)
-    << ", \"max\": " << (v.empty() ? -1.0 : *std::max_element(v.begin(), v.end())) << "}";
+  s << "{\"p50\": " << h.percentile(50) << ", \"p99\": " << h.percentile(99)
+    << ", \"max\": " << h.max() << "}";
   return s.str();
 }
 
+constexpr double kBinMinMs = 0.001, kBinGrowth = 1.01;
+const double kLogGrowth = std::log(kBinGrowth);
+constexpr std::size_t kBins = 1856;  // 0.001 ms * 1.01^1856 = 1.0e5 ms
+
 }  // namespace
+
+LatencyHistogram::LatencyHistogram() : bins_(kBins + 1, 0) {}
+
+void LatencyHistogram::add(double ms) {
+  // Bin 0: below 0.001 ms; bin k: [0.001 * 1.01^(k-1), 0.001 * 1.01^k); the last: beyond.
+  std::size_t k = 0;
+  if (ms >= kBinMinMs) {
+    k = 1 + static_cast<std::size_t>(std::log(ms / kBinMinMs) / kLogGrowth);
+    if (k > kBins) k = kBins;
+  }
+  ++bins_[k];
+  ++count_;
+  if (count_ == 1 || ms > max_) max_ = ms;
+}
+
+double LatencyHistogram::percentile(double p) const {
+  if (count_ == 0) return -1;
+  // The sample of rank p / 100 * (count - 1), rounded, as nth_element over the samples gave.
+  const uint64_t rank = std::min<uint64_t>(count_ - 1, static_cast<uint64_t>(p / 100.0 * (count_ - 1) + 0.5));
+  uint64_t seen = 0;
+  for (std::size_t k = 0; k <= kBins; ++k) {
+    seen += bins_[k];
+    if (seen > rank) {
+      if (k == 0) return 0.0;
+      // The bin's geometric middle, at most the maximum.
+      return std::min(max_, kBinMinMs * std::pow(kBinGrowth, static_cast<double>(k) - 0.5));
+    }
+  }
+  return max_;
+}
 
 LatencyMonitorRos::LatencyMonitorRos(ros::NodeHandle nh, ros::NodeHandle private_nh)
     : nh_(nh), private_nh_(private_nh) {
@@ -72,8 +107,6 @@ LatencyMonitorRos::LatencyMonitorRos(ros::NodeHandle nh, ros::NodeHandle private
       s->input_type = list[i].hasMember("input_type")
                           ? static_cast<std::string>(list[i]["input_type"])
                           : std::string("PointCloud2");
-      s->latency_ms.reserve(100000);  // no reallocation (and RSS step) during a soak
-      s->end_to_end_ms.reserve(100000);
       Stream* raw = s.get();
       if (s->input_type == "LaserScan") {
         s->input_sub = nh_.subscribe<sensor_msgs::LaserScan>(
@@ -114,8 +147,8 @@ void LatencyMonitorRos::onInput(Stream* s, const std_msgs::Header& header) {
   auto early = s->early.find(header.stamp.toNSec());
   if (early != s->early.end()) {  // the output was faster than this callback
     ++s->outputs;
-    s->latency_ms.push_back(0.f);
-    s->end_to_end_ms.push_back(static_cast<float>((early->second - header.stamp.toSec()) * 1e3));
+    s->latency_ms.add(0.0);
+    s->end_to_end_ms.add((early->second - header.stamp.toSec()) * 1e3);
     s->early.erase(early);
     return;
   }
@@ -131,8 +164,8 @@ void LatencyMonitorRos::onOutput(Stream* s, const std_msgs::Header& header) {
     return;
   }
   ++s->outputs;
-  s->latency_ms.push_back(static_cast<float>((now - it->second) * 1e3));
-  s->end_to_end_ms.push_back(static_cast<float>((now - header.stamp.toSec()) * 1e3));
+  s->latency_ms.add((now - it->second) * 1e3);
+  s->end_to_end_ms.add((now - header.stamp.toSec()) * 1e3);
   s->waiting.erase(it);
 }
 

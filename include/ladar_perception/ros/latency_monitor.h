@@ -29,6 +29,24 @@
 
 namespace ladar_perception {
 
+// Latencies in a fixed set of bins 1% wide (0.001 ms to 100 s), allocated and written once:
+// recording a sample allocates nothing, so the monitor's own memory does not grow with the length
+// of the run (a vector of every sample grew 0.7 KiB/s at 85 scans/s and showed as the manager's
+// growth). Percentiles are exact to the bin, 1%; the maximum is exact.
+class LatencyHistogram {
+ public:
+  LatencyHistogram();
+  void add(double ms);
+  bool empty() const { return count_ == 0; }
+  double percentile(double p) const;  // p in [0, 100]; -1 when empty
+  double max() const { return count_ ? max_ : -1.0; }
+
+ private:
+  std::vector<uint64_t> bins_;
+  uint64_t count_ = 0;
+  double max_ = 0;
+};
+
 class LatencyMonitorRos {
  public:
   LatencyMonitorRos(ros::NodeHandle nh, ros::NodeHandle private_nh);
@@ -42,7 +60,7 @@ class LatencyMonitorRos {
     // Outputs whose input callback has not run yet (the manager's threads run the perception
     // nodelet and this monitor concurrently): stamp -> wall receipt time.
     std::map<uint64_t, double> early;
-    std::vector<float> latency_ms, end_to_end_ms;
+    LatencyHistogram latency_ms, end_to_end_ms;
     uint64_t inputs = 0, outputs = 0, dropped = 0, unmatched_outputs = 0;
     ros::Subscriber input_sub, output_sub;
   };
