@@ -8,8 +8,6 @@
 // package.
 #include <gtest/gtest.h>
 
-#include <dirent.h>
-
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
@@ -17,7 +15,6 @@
 #include <string>
 #include <vector>
 
-#include <geometry_msgs/TransformStamped.h>
 #include <ros/ros.h>
 #include <sensor_msgs/PointCloud2.h>
 #include <tf2_msgs/TFMessage.h>
@@ -35,55 +32,13 @@ namespace {
 
 using lp::rostest::Latest;
 using lp::rostest::cloudMsg;
+using lp::rostest::kittiDir;
+using lp::rostest::kittiScans;
+using lp::rostest::labelsOf;
+using lp::rostest::mountTransform;
 using lp::rostest::waitFor;
 
 constexpr float kSensorHeight = 1.73f;  // KITTI's Velodyne above the road [m]
-
-std::string kittiDir() {
-  if (const char* env = std::getenv("LADAR_KITTI_DIR")) return env;
-  return std::string(LADAR_SOURCE_DIR) + "/../shared/data/kitti_hdl64";
-}
-
-std::vector<std::string> kittiScans() {
-  std::vector<std::string> out;
-  const std::string dir = kittiDir();
-  if (DIR* d = opendir(dir.c_str())) {
-    while (dirent* e = readdir(d)) {
-      const std::string name = e->d_name;
-      if (name.size() > 4 && name.substr(name.size() - 4) == ".bin") out.push_back(dir + "/" + name);
-    }
-    closedir(d);
-  }
-  std::sort(out.begin(), out.end());
-  return out;
-}
-
-geometry_msgs::TransformStamped transform(const std::string& parent, const std::string& child,
-                                          double z, ros::Time stamp) {
-  geometry_msgs::TransformStamped t;
-  t.header.stamp = stamp;
-  t.header.frame_id = parent;
-  t.child_frame_id = child;
-  t.transform.translation.z = z;
-  t.transform.rotation.w = 1.0;
-  return t;
-}
-
-// The `label` field of a classified cloud.
-std::vector<uint8_t> labelsOf(const sensor_msgs::PointCloud2& msg) {
-  lp::CloudLayout layout;
-  lp::PointCloudView view;
-  std::string error;
-  std::vector<uint8_t> out;
-  EXPECT_TRUE(lp::viewOf(msg, &layout, &view, &error)) << error;
-  const lp::FieldAccessor label = view.field("label");
-  EXPECT_TRUE(label.valid);
-  if (!label.valid) return out;
-  for (std::size_t i = 0; i < view.size(); ++i) {
-    out.push_back(static_cast<uint8_t>(label.read<int>(view.pointData(i))));
-  }
-  return out;
-}
 
 TEST(RealScans, EveryValidScanAnsweredWithTheCoreLabelsBetweenFaults) {
   const std::vector<std::string> files = kittiScans();
@@ -100,7 +55,7 @@ TEST(RealScans, EveryValidScanAnsweredWithTheCoreLabelsBetweenFaults) {
   ros::Publisher tf_pub = ros::NodeHandle().advertise<tf2_msgs::TFMessage>("/tf_static", 10, true);
   ros::Publisher tf_dyn = ros::NodeHandle().advertise<tf2_msgs::TFMessage>("/tf", 10);
   tf2_msgs::TFMessage statics;
-  statics.transforms.push_back(transform("base_footprint", "velodyne", kSensorHeight, ros::Time(0)));
+  statics.transforms.push_back(mountTransform("base_footprint", "velodyne", kSensorHeight, ros::Time(0)));
   tf_pub.publish(statics);
   ASSERT_TRUE(waitFor([&] {
     return pub.getNumSubscribers() > 0 && sub.getNumPublishers() > 0 && tf_dyn.getNumSubscribers() > 0;
@@ -196,8 +151,8 @@ TEST(RealScans, EveryValidScanAnsweredWithTheCoreLabelsBetweenFaults) {
     pub.publish(m);
     EXPECT_FALSE(waitFor([&] { return classified.count > before; }, 0.5));
     tf2_msgs::TFMessage tf;
-    tf.transforms.push_back(transform("base_footprint", "velodyne_late", kSensorHeight, stamp - ros::Duration(0.05)));
-    tf.transforms.push_back(transform("base_footprint", "velodyne_late", kSensorHeight, stamp + ros::Duration(0.05)));
+    tf.transforms.push_back(mountTransform("base_footprint", "velodyne_late", kSensorHeight, stamp - ros::Duration(0.05)));
+    tf.transforms.push_back(mountTransform("base_footprint", "velodyne_late", kSensorHeight, stamp + ros::Duration(0.05)));
     tf_dyn.publish(tf);
     ASSERT_TRUE(waitFor([&] { return classified.count > before; }, 30.0)) << "the late scan was lost";
     ++answered;

@@ -1,17 +1,22 @@
 // Helpers shared by the rostest nodes in test/ros: waiting on a condition, collecting the
-// messages of a topic, and the synthetic flat-ground Velodyne cloud most tests feed the
-// perception nodelets.
+// messages of a topic, the synthetic flat-ground Velodyne cloud most tests feed the
+// perception nodelets, and the real KITTI scans some of them read when they are present.
 #pragma once
 
 #include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
 #include <functional>
 #include <mutex>
 #include <string>
+#include <vector>
+
+#include <dirent.h>
 
 #include <boost/shared_ptr.hpp>
+#include <geometry_msgs/TransformStamped.h>
 #include <ros/ros.h>
 #include <sensor_msgs/PointCloud2.h>
 
@@ -88,6 +93,56 @@ inline sensor_msgs::PointCloud2Ptr cloudMsg(const PackedCloud& c, const std::str
   m->header.frame_id = frame;
   m->header.stamp = stamp;
   return m;
+}
+
+// A sensor mount `z` metres straight above `parent`, unrotated, at `stamp`.
+inline geometry_msgs::TransformStamped mountTransform(const std::string& parent, const std::string& child,
+                                                      double z, ros::Time stamp) {
+  geometry_msgs::TransformStamped t;
+  t.header.stamp = stamp;
+  t.header.frame_id = parent;
+  t.child_frame_id = child;
+  t.transform.translation.z = z;
+  t.transform.rotation.w = 1.0;
+  return t;
+}
+
+// The folder of real KITTI Velodyne scans: $LADAR_KITTI_DIR, else the data folder beside the
+// package. The data are not part of the package; tests that read them skip without them.
+inline std::string kittiDir() {
+  if (const char* env = std::getenv("LADAR_KITTI_DIR")) return env;
+  return std::string(LADAR_SOURCE_DIR) + "/../shared/data/kitti_hdl64";
+}
+
+// The .bin scans of kittiDir(), sorted by name (empty when there are none).
+inline std::vector<std::string> kittiScans() {
+  std::vector<std::string> out;
+  const std::string dir = kittiDir();
+  if (DIR* d = opendir(dir.c_str())) {
+    while (dirent* e = readdir(d)) {
+      const std::string name = e->d_name;
+      if (name.size() > 4 && name.substr(name.size() - 4) == ".bin") out.push_back(dir + "/" + name);
+    }
+    closedir(d);
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+// The `label` field of a classified cloud, one byte per point (empty when it has none).
+inline std::vector<uint8_t> labelsOf(const sensor_msgs::PointCloud2& msg) {
+  CloudLayout layout;
+  PointCloudView view;
+  std::string error;
+  std::vector<uint8_t> out;
+  if (!viewOf(msg, &layout, &view, &error)) return out;
+  const FieldAccessor label = view.field("label");
+  if (!label.valid) return out;
+  out.reserve(view.size());
+  for (std::size_t i = 0; i < view.size(); ++i) {
+    out.push_back(static_cast<uint8_t>(label.read<int>(view.pointData(i))));
+  }
+  return out;
 }
 
 }  // namespace rostest
