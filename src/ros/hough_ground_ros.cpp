@@ -12,57 +12,18 @@
 
 namespace ladar_perception {
 
+// Both directions are produced from the parameter table (hough_params.def).
 HoughGroundParams toHoughGroundParams(const HoughGroundConfig& c) {
   HoughGroundParams p = c.method == "thesis" ? houghGroundThesisParams() : houghGroundDefaultParams();
-  p.ground_min = static_cast<float>(c.ground_min);
-  p.ground_max = static_cast<float>(c.ground_max);
-  p.ground_resolution = static_cast<float>(c.ground_resolution);
-  p.slope_min = static_cast<float>(c.slope_min);
-  p.slope_max = static_cast<float>(c.slope_max);
-  p.slope_resolution = static_cast<float>(c.slope_resolution);
-  p.error_tolerance = static_cast<float>(c.error_tolerance);
-  p.min_fit_distance = static_cast<float>(c.min_fit_distance);
-  p.max_fit_distance = static_cast<float>(c.max_fit_distance);
-  p.min_inliers = c.min_inliers;
-  p.refine = c.refine;
-  p.refine_iterations = c.refine_iterations;
-  p.bend_segments = c.bend_segments;
-  p.segment_length = static_cast<float>(c.segment_length);
-  p.max_bend = static_cast<float>(c.max_bend);
-  p.min_segment_inliers = c.min_segment_inliers;
-  p.slope_error_min_distance = static_cast<float>(c.slope_error_min_distance);
-  p.tolerances.gnd_error_max_base = static_cast<float>(c.gnd_error_max_base);
-  p.tolerances.gnd_error_max_per_m = static_cast<float>(c.gnd_error_max_per_m);
-  p.tolerances.slope_error_max_base = static_cast<float>(c.slope_error_max_base);
-  p.tolerances.slope_error_max_per_m = static_cast<float>(c.slope_error_max_per_m);
-  p.tolerances.obstacle_threshold = static_cast<float>(c.obstacle_threshold);
+#define LADAR_PARAM(type, member, name, def, lo, hi, unit, meaning) p.member = static_cast<type>(c.name);
+#include "ladar_perception/ground/hough_params.def"
   return p;
 }
 
 void loadHoughMethodSettings(const std::string& method, HoughGroundConfig* c) {
   const HoughGroundParams p = method == "thesis" ? houghGroundThesisParams() : houghGroundDefaultParams();
-  c->ground_min = p.ground_min;
-  c->ground_max = p.ground_max;
-  c->ground_resolution = p.ground_resolution;
-  c->slope_min = p.slope_min;
-  c->slope_max = p.slope_max;
-  c->slope_resolution = p.slope_resolution;
-  c->error_tolerance = p.error_tolerance;
-  c->min_fit_distance = p.min_fit_distance;
-  c->max_fit_distance = p.max_fit_distance;
-  c->min_inliers = p.min_inliers;
-  c->refine = p.refine;
-  c->refine_iterations = p.refine_iterations;
-  c->bend_segments = p.bend_segments;
-  c->segment_length = p.segment_length;
-  c->max_bend = p.max_bend;
-  c->min_segment_inliers = p.min_segment_inliers;
-  c->slope_error_min_distance = p.slope_error_min_distance;
-  c->gnd_error_max_base = p.tolerances.gnd_error_max_base;
-  c->gnd_error_max_per_m = p.tolerances.gnd_error_max_per_m;
-  c->slope_error_max_base = p.tolerances.slope_error_max_base;
-  c->slope_error_max_per_m = p.tolerances.slope_error_max_per_m;
-  c->obstacle_threshold = p.tolerances.obstacle_threshold;
+#define LADAR_PARAM(type, member, name, def, lo, hi, unit, meaning) c->name = p.member;
+#include "ladar_perception/ground/hough_params.def"
 }
 
 HoughGroundRos::HoughGroundRos(ros::NodeHandle nh, ros::NodeHandle private_nh)

@@ -7,117 +7,35 @@
 
 namespace ladar_perception {
 
+namespace {
+
+// A table row's value between dynamic_reconfigure's field and the params' field (the ROS types
+// double, int, bool and, for curb_policy, the string obstacle | ground).
+void fromConfig(double c, float* p) { *p = static_cast<float>(c); }
+void fromConfig(int c, int* p) { *p = c; }
+void fromConfig(bool c, bool* p) { *p = c; }
+void fromConfig(const std::string& c, int* p) { *p = c == "ground" ? kCurbGround : kCurbObstacle; }
+void toConfig(float p, double* c) { *c = p; }
+void toConfig(int p, int* c) { *c = p; }
+void toConfig(bool p, bool* c) { *c = p; }
+void toConfig(int p, std::string* c) { *c = p == kCurbGround ? "ground" : "obstacle"; }
+
+}  // namespace
+
+// Both directions are produced from the parameter table (vertical_scan_params.def).
 VerticalScanParams toVerticalScanParams(const VerticalScanGroundConfig& c) {
   VerticalScanParams p =
       c.method == "thesis" ? verticalScanThesisParams() : verticalScanDefaultParams();
-  p.column_width_deg = static_cast<float>(c.column_width_deg);
-  p.min_range = static_cast<float>(c.min_range);
-  p.max_range = static_cast<float>(c.max_range);
-  p.ground_slope_min = static_cast<float>(c.ground_slope_min);
-  p.ground_slope_max = static_cast<float>(c.ground_slope_max);
-  p.iterations = c.iterations;
-  p.weight_bias = static_cast<float>(c.weight_bias);
-  p.tolerances.gnd_error_max_base = static_cast<float>(c.gnd_error_max_base);
-  p.tolerances.gnd_error_max_per_m = static_cast<float>(c.gnd_error_max_per_m);
-  p.tolerances.slope_error_max_base = static_cast<float>(c.slope_error_max_base);
-  p.tolerances.slope_error_max_per_m = static_cast<float>(c.slope_error_max_per_m);
-  p.tolerances.obstacle_threshold = static_cast<float>(c.obstacle_threshold);
-  p.segment_length = static_cast<float>(c.segment_length);
-  p.track_max_step = static_cast<float>(c.track_max_step);
-  p.track_max_drop = static_cast<float>(c.track_max_drop);
-  p.track_tolerance_per_m = static_cast<float>(c.track_tolerance_per_m);
-  p.track_drop_per_m = static_cast<float>(c.track_drop_per_m);
-  p.track_max_local_slope = static_cast<float>(c.track_max_local_slope);
-  p.track_min_local_slope = static_cast<float>(c.track_min_local_slope);
-  p.track_anchor_distance = static_cast<float>(c.track_anchor_distance);
-  p.track_max_bend = static_cast<float>(c.track_max_bend);
-  p.track_first_slope_max = static_cast<float>(c.track_first_slope_max);
-  p.track_recover_distance = static_cast<float>(c.track_recover_distance);
-  p.negative_gnd_error_max = static_cast<float>(c.negative_gnd_error_max);
-  p.negative_support_distance = static_cast<float>(c.negative_support_distance);
-  p.vertical_gnd_error_max = static_cast<float>(c.vertical_gnd_error_max);
-  p.vertical_slope_max = static_cast<float>(c.vertical_slope_max);
-  p.vertical_foot_slope = static_cast<float>(c.vertical_foot_slope);
-  p.laser_neighbours = c.laser_neighbours;
-  p.neighbour_cells_per_column = c.neighbour_cells_per_column;
-  p.neighbour_max_dr = static_cast<float>(c.neighbour_max_dr);
-  p.neighbour_spacing_fraction = static_cast<float>(c.neighbour_spacing_fraction);
-  p.neighbour_min_step = static_cast<float>(c.neighbour_min_step);
-  p.curb_policy = c.curb_policy == "ground" ? kCurbGround : kCurbObstacle;
-  p.curb_max_height = static_cast<float>(c.curb_max_height);
-  p.curb_max_depth = static_cast<float>(c.curb_max_depth);
-  p.local_ground = c.local_ground;
-  p.local_ground_cell = static_cast<float>(c.local_ground_cell);
-  p.local_ground_columns = c.local_ground_columns;
-  p.local_ground_rings = c.local_ground_rings;
-  p.local_ground_min_returns = c.local_ground_min_returns;
-  p.local_ground_below = static_cast<float>(c.local_ground_below);
-  p.local_ground_above = static_cast<float>(c.local_ground_above);
-  p.local_ground_face_dr = static_cast<float>(c.local_ground_face_dr);
-  p.local_ground_face_height = static_cast<float>(c.local_ground_face_height);
-  p.bend_ground_line = c.bend_ground_line;
-  p.couple_columns = c.couple_columns;
-  p.negative_obstacles = c.negative_obstacles;
-  p.vertical_surfaces = c.vertical_surfaces;
-  p.coupling_radius = c.coupling_radius;
-  p.min_ground_returns = c.min_ground_returns;
+#define LADAR_PARAM(type, member, name, def, lo, hi, unit, meaning) fromConfig(c.name, &p.member);
+#include "ladar_perception/ground/vertical_scan_params.def"
   return p;
 }
 
 void loadMethodSettings(const std::string& method, VerticalScanGroundConfig* c) {
   const VerticalScanParams p =
       method == "thesis" ? verticalScanThesisParams() : verticalScanDefaultParams();
-  c->column_width_deg = p.column_width_deg;
-  c->min_range = p.min_range;
-  c->max_range = p.max_range;
-  c->ground_slope_min = p.ground_slope_min;
-  c->ground_slope_max = p.ground_slope_max;
-  c->iterations = p.iterations;
-  c->weight_bias = p.weight_bias;
-  c->gnd_error_max_base = p.tolerances.gnd_error_max_base;
-  c->gnd_error_max_per_m = p.tolerances.gnd_error_max_per_m;
-  c->slope_error_max_base = p.tolerances.slope_error_max_base;
-  c->slope_error_max_per_m = p.tolerances.slope_error_max_per_m;
-  c->obstacle_threshold = p.tolerances.obstacle_threshold;
-  c->segment_length = p.segment_length;
-  c->track_max_step = p.track_max_step;
-  c->track_max_drop = p.track_max_drop;
-  c->track_tolerance_per_m = p.track_tolerance_per_m;
-  c->track_drop_per_m = p.track_drop_per_m;
-  c->track_max_local_slope = p.track_max_local_slope;
-  c->track_min_local_slope = p.track_min_local_slope;
-  c->track_anchor_distance = p.track_anchor_distance;
-  c->track_max_bend = p.track_max_bend;
-  c->track_first_slope_max = p.track_first_slope_max;
-  c->track_recover_distance = p.track_recover_distance;
-  c->negative_gnd_error_max = p.negative_gnd_error_max;
-  c->negative_support_distance = p.negative_support_distance;
-  c->vertical_gnd_error_max = p.vertical_gnd_error_max;
-  c->vertical_slope_max = p.vertical_slope_max;
-  c->vertical_foot_slope = p.vertical_foot_slope;
-  c->laser_neighbours = p.laser_neighbours;
-  c->neighbour_cells_per_column = p.neighbour_cells_per_column;
-  c->neighbour_max_dr = p.neighbour_max_dr;
-  c->neighbour_spacing_fraction = p.neighbour_spacing_fraction;
-  c->neighbour_min_step = p.neighbour_min_step;
-  c->curb_policy = p.curb_policy == kCurbGround ? "ground" : "obstacle";
-  c->curb_max_height = p.curb_max_height;
-  c->curb_max_depth = p.curb_max_depth;
-  c->local_ground = p.local_ground;
-  c->local_ground_cell = p.local_ground_cell;
-  c->local_ground_columns = p.local_ground_columns;
-  c->local_ground_rings = p.local_ground_rings;
-  c->local_ground_min_returns = p.local_ground_min_returns;
-  c->local_ground_below = p.local_ground_below;
-  c->local_ground_above = p.local_ground_above;
-  c->local_ground_face_dr = p.local_ground_face_dr;
-  c->local_ground_face_height = p.local_ground_face_height;
-  c->bend_ground_line = p.bend_ground_line;
-  c->couple_columns = p.couple_columns;
-  c->negative_obstacles = p.negative_obstacles;
-  c->vertical_surfaces = p.vertical_surfaces;
-  c->coupling_radius = p.coupling_radius;
-  c->min_ground_returns = p.min_ground_returns;
+#define LADAR_PARAM(type, member, name, def, lo, hi, unit, meaning) toConfig(p.member, &c->name);
+#include "ladar_perception/ground/vertical_scan_params.def"
 }
 
 VerticalScanGroundRos::VerticalScanGroundRos(ros::NodeHandle nh, ros::NodeHandle private_nh)

@@ -27,6 +27,7 @@
 #include "ladar_perception/ground/ground_classification.h"
 #include "ladar_perception/ground/ground_model.h"
 #include "ladar_perception/ground/obstacle_probability.h"
+#include "ladar_perception/ground/param_table.h"
 #include "ladar_perception/ground/vertical_scan.h"
 
 namespace ladar_perception {
@@ -85,6 +86,13 @@ struct HoughGroundParams {
 // Settings of the thesis (3.3.4: accumulator argmax only) and the default (with refinement).
 HoughGroundParams houghGroundThesisParams();
 HoughGroundParams houghGroundDefaultParams();
+
+// The parameter table (hough_params.def): set one parameter by its name or field path within
+// its range (false with a reason otherwise), read one, list them.
+bool setHoughGroundParam(HoughGroundParams* params, const std::string& key, double value,
+                         std::string* error);
+bool getHoughGroundParam(const HoughGroundParams& params, const std::string& key, double* value);
+const std::vector<ParamInfo>& houghGroundParamTable();
 
 // The fitted ground line Height = ground + slope * r of one vertical scan and its confidence.
 struct GroundLineFit {

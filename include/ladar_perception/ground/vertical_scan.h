@@ -1,6 +1,7 @@
-// Vertical scan ground extraction for a Velodyne-style 3D ladar (thesis 3.3, algorithms.md).
-// Keep cfg/VerticalScanGround.cfg, config/vertical_scan_ground.yaml and the ROS adapter in step
-// with VerticalScanParams.
+// Vertical scan ground extraction for a Velodyne-style 3D ladar (thesis 3.3).
+// Every reconfigurable field of VerticalScanParams has one row in vertical_scan_params.def, from
+// which --set, the ROS mapping and cfg/VerticalScanGround.cfg are produced: a new field gets its
+// row there (the parameter-table test fails otherwise).
 #pragma once
 
 #include <cstdint>
@@ -13,6 +14,7 @@
 #include "ladar_perception/ground/ground_classification.h"
 #include "ladar_perception/ground/ground_model.h"
 #include "ladar_perception/ground/obstacle_probability.h"
+#include "ladar_perception/ground/param_table.h"
 
 namespace ladar_perception {
 
@@ -154,11 +156,15 @@ VerticalScanParams verticalScanThesisParams();
 VerticalScanParams verticalScanDefaultParams();
 VerticalScanParams verticalScanBinsParams();
 
-// Sets one scalar parameter by its field name ("weight_bias", "tolerances.gnd_error_max_base",
-// "bend_ground_line" (0/1), ...): the tools' --set key=value. False with a reason for an unknown
-// key.
+// Sets one parameter of the table by its name or field path ("weight_bias",
+// "gnd_error_max_base" or "tolerances.gnd_error_max_base", "bend_ground_line" 0/1, ...): the
+// tools' --set key=value. False with a reason for an unknown key or a value out of its range.
 bool setVerticalScanParam(VerticalScanParams* params, const std::string& key, double value,
                           std::string* error);
+// Reads one parameter of the table (bools as 0/1); false for an unknown key.
+bool getVerticalScanParam(const VerticalScanParams& params, const std::string& key, double* value);
+// The parameter table, in the order of vertical_scan_params.def.
+const std::vector<ParamInfo>& verticalScanParamTable();
 
 // The vertical scan method as a GroundModel with the given params (used by the nodelet, which
 // rebuilds the model when dynamic_reconfigure changes a parameter).

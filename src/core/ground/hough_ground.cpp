@@ -4,6 +4,10 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <string>
+#include <vector>
+
+#include "param_access.h"
 
 namespace ladar_perception {
 
@@ -26,6 +30,32 @@ HoughGroundParams houghGroundThesisParams() {
 }
 
 HoughGroundParams houghGroundDefaultParams() { return HoughGroundParams(); }
+
+namespace {
+
+const std::vector<ParamAccess<HoughGroundParams>>& houghTable() {
+  static const std::vector<ParamAccess<HoughGroundParams>> rows = {
+#define LADAR_PARAM(...) LADAR_PARAM_ACCESS(HoughGroundParams, __VA_ARGS__)
+#include "ladar_perception/ground/hough_params.def"
+  };
+  return rows;
+}
+
+}  // namespace
+
+bool setHoughGroundParam(HoughGroundParams* p, const std::string& key, double value,
+                         std::string* error) {
+  return setParam(houghTable(), "Hough ground", p, key, value, error);
+}
+
+bool getHoughGroundParam(const HoughGroundParams& p, const std::string& key, double* value) {
+  return getParam(houghTable(), p, key, value);
+}
+
+const std::vector<ParamInfo>& houghGroundParamTable() {
+  static const std::vector<ParamInfo> infos = paramInfos(houghTable());
+  return infos;
+}
 
 // --------------------------------------------------------------------------------------------
 // The accumulator.
