@@ -308,6 +308,8 @@ class VerticalScanGround : public GroundModel {
  private:
   // Column (0..columns_-1) of a ground-frame direction, through the atan LUT.
   float columnCoordinate(float x, float y) const;
+  // groundHeight() for the stages, inlined (defined in the core's vertical_scan_internal.h).
+  inline float groundLineHeight(int col, float r) const;
   template <bool kRing, bool kTilted, bool kFastXYZ, bool kSubColumns>
   void binPoints(const PointCloudView& view, const SensorPose& pose, GroundClassification* out);
   void fitColumns();
