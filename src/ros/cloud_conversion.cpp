@@ -24,21 +24,6 @@ bool viewOf(const sensor_msgs::PointCloud2& msg, CloudLayout* layout, PointCloud
   return PointCloudView::create(msg.data.data(), msg.data.size(), *layout, view, error, code);
 }
 
-namespace {
-
-void copyFields(const CloudLayout& layout, sensor_msgs::PointCloud2* out) {
-  out->fields.clear();
-  for (const FieldDesc& f : layout.fields) {
-    sensor_msgs::PointField pf;
-    pf.name = f.name;
-    pf.offset = f.offset;
-    pf.datatype = f.datatype;
-    pf.count = f.count;
-    out->fields.push_back(pf);
-  }
-}
-
-}  // namespace
 
 sensor_msgs::PointCloud2Ptr subsetCloud(const sensor_msgs::PointCloud2& in,
                                         const PointCloudView& view,
@@ -106,14 +91,26 @@ sensor_msgs::PointCloud2Ptr classifiedCloud(const sensor_msgs::PointCloud2& in,
   return out;
 }
 
+void applyLayout(const CloudLayout& layout, sensor_msgs::PointCloud2* out) {
+  out->fields.clear();
+  for (const FieldDesc& f : layout.fields) {
+    sensor_msgs::PointField pf;
+    pf.name = f.name;
+    pf.offset = f.offset;
+    pf.datatype = f.datatype;
+    pf.count = f.count;
+    out->fields.push_back(pf);
+  }
+  out->width = layout.width;
+  out->height = layout.height;
+  out->point_step = layout.point_step;
+  out->row_step = layout.row_step;
+  out->is_bigendian = layout.is_bigendian;
+}
+
 sensor_msgs::PointCloud2Ptr toMessage(const PackedCloud& cloud) {
   sensor_msgs::PointCloud2Ptr out(new sensor_msgs::PointCloud2);
-  copyFields(cloud.layout, out.get());
-  out->width = cloud.layout.width;
-  out->height = cloud.layout.height;
-  out->point_step = cloud.layout.point_step;
-  out->row_step = cloud.layout.row_step;
-  out->is_bigendian = cloud.layout.is_bigendian;
+  applyLayout(cloud.layout, out.get());
   out->is_dense = false;
   out->data = cloud.data;
   return out;

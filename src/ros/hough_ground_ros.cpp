@@ -127,19 +127,7 @@ void HoughGroundRos::process(const sensor_msgs::LaserScanConstPtr& msg) {
     sensor_msgs::PointCloud2 points;
     points.header = msg->header;
     const CloudLayout layout = laserScanLayout(static_cast<uint32_t>(scan.size));
-    for (const FieldDesc& f : layout.fields) {
-      sensor_msgs::PointField pf;
-      pf.name = f.name;
-      pf.offset = f.offset;
-      pf.datatype = f.datatype;
-      pf.count = f.count;
-      points.fields.push_back(pf);
-    }
-    points.height = 1;
-    points.width = layout.width;
-    points.point_step = layout.point_step;
-    points.row_step = layout.row_step;
-    points.is_bigendian = false;
+    applyLayout(layout, &points);
     points.is_dense = false;
     points.data.resize(static_cast<std::size_t>(layout.row_step));
     cloud_projector_.projectPacked(scan, points.data.data());

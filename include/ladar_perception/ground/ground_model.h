@@ -2,14 +2,29 @@
 // One virtual call per scan, none per point.
 #pragma once
 
+#include <cmath>
 #include <memory>
 #include <string>
 #include <vector>
+
+#include <Eigen/Core>
 
 #include "ladar_perception/cloud/point_cloud_view.h"
 #include "ladar_perception/ground/ground_classification.h"
 
 namespace ladar_perception {
+
+// The range gate of the ground models that fit the whole scan (plane fit, Hough columns): a
+// return takes part when its range from the sensor is finite and within [min_range, max_range].
+struct RangeGate {
+  RangeGate(float min_range, float max_range)
+      : min2(min_range * min_range), max2(max_range * max_range) {}
+  bool admits(const Eigen::Vector3f& p) const {
+    const float d2 = p.squaredNorm();
+    return std::isfinite(d2) && d2 >= min2 && d2 <= max2;
+  }
+  float min2, max2;
+};
 
 class GroundModel {
  public:

@@ -35,4 +35,8 @@ sensor_msgs::PointCloud2Ptr classifiedCloud(const sensor_msgs::PointCloud2& in,
 // The message form of a PackedCloud (simulator and tools).
 sensor_msgs::PointCloud2Ptr toMessage(const PackedCloud& cloud);
 
+// Writes layout's fields, width, height, point_step, row_step and byte order into out (not its
+// data).
+void applyLayout(const CloudLayout& layout, sensor_msgs::PointCloud2* out);
+
 }  // namespace ladar_perception

@@ -151,41 +151,37 @@ void gridPass(Evaluator& eval, SearchResult* r, const Pose6& range, const std::v
     if (a == axes.size()) break;
   }
 }
-}  // namespace
 
-SearchResult intervalSearch(const CostFn& cost, const SearchParams& params,
-                            const ProgressFn& progress) {
+// The interval searches (Algorithm 2 and its semi-independent variant): each iteration runs a
+// grid pass over every group of axes in turn, then shrinks the range.
+SearchResult groupedIntervalSearch(const CostFn& cost, const SearchParams& params,
+                                   const ProgressFn& progress, const char* name,
+                                   const std::vector<std::vector<int>>& axis_groups) {
   SearchResult r = start(cost, params);
   Evaluator eval{cost, &r};
   Pose6 range = params.spread;
-  const std::vector<int> all = {0, 1, 2, 3, 4, 5};
   while (r.iterations < params.max_iterations) {
-    gridPass(eval, &r, range, all, params);
+    for (const std::vector<int>& axes : axis_groups) gridPass(eval, &r, range, axes, params);
     ++r.iterations;
     range *= params.shrink;
-    if (!report(progress, "interval", &r, range)) break;
+    if (!report(progress, name, &r, range)) break;
     if (belowAccuracy(range, params)) break;
   }
   r.weighted_mean = r.best;
   return r;
 }
+}  // namespace
+
+SearchResult intervalSearch(const CostFn& cost, const SearchParams& params,
+                            const ProgressFn& progress) {
+  return groupedIntervalSearch(cost, params, progress, "interval", {{0, 1, 2, 3, 4, 5}});
+}
 
 SearchResult semiIndependentIntervalSearch(const CostFn& cost, const SearchParams& params,
                                            const ProgressFn& progress) {
-  SearchResult r = start(cost, params);
-  Evaluator eval{cost, &r};
-  Pose6 range = params.spread;
-  const std::vector<int> rotation = {kRoll, kPitch, kYaw}, translation = {kX, kY, kZ};
-  while (r.iterations < params.max_iterations) {
-    gridPass(eval, &r, range, rotation, params);  // the sensitive axes first
-    gridPass(eval, &r, range, translation, params);
-    ++r.iterations;
-    range *= params.shrink;
-    if (!report(progress, "semi_independent", &r, range)) break;
-    if (belowAccuracy(range, params)) break;
-  }
-  r.weighted_mean = r.best;
-  return r;
+  // The sensitive axes (rotation) first, then translation.
+  return groupedIntervalSearch(cost, params, progress, "semi_independent",
+                               {{kRoll, kPitch, kYaw}, {kX, kY, kZ}});
 }
 
 SearchResult particleFilter(const CostFn& cost, const SearchParams& params,

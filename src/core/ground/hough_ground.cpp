@@ -515,14 +515,12 @@ class HoughColumnsModel : public GroundModel {
     start_.assign(columns_ + 1, 0);
     const Eigen::Matrix3f R = pose.sensor_to_ground.linear();
     const float sensor_z = pose.sensor_to_ground.translation().z();
-    const float min2 = params_.min_range * params_.min_range;
-    const float max2 = params_.max_range * params_.max_range;
+    const RangeGate gate(params_.min_range, params_.max_range);
     for (std::size_t i = 0; i < n; ++i) {
       const Eigen::Vector3f p = view.xyz(i);
-      const float d2 = p.squaredNorm();
       out->labels[i] = kLabelUnknown;
       out->p_obstacle[i] = 0.f;
-      if (!std::isfinite(d2) || d2 < min2 || d2 > max2) {
+      if (!gate.admits(p)) {
         col_[i] = -1;
         continue;
       }

@@ -59,14 +59,12 @@ void PlaneFitGround::classify(const PointCloudView& view, const SensorPose& pose
   z_.clear();
   index_.clear();
   const Eigen::Matrix3f R = pose.sensor_to_ground.linear();
-  const float min2 = params_.min_range * params_.min_range;
-  const float max2 = params_.max_range * params_.max_range;
+  const RangeGate gate(params_.min_range, params_.max_range);
   for (std::size_t i = 0; i < n; ++i) {
     const Eigen::Vector3f p = view.xyz(i);
-    const float d2 = p.squaredNorm();
     out->labels[i] = kLabelUnknown;
     out->p_obstacle[i] = 0.f;
-    if (!std::isfinite(d2) || d2 < min2 || d2 > max2) continue;
+    if (!gate.admits(p)) continue;
     const Eigen::Vector3f q = R * p;  // gravity aligned, origin at the sensor
     x_.push_back(q.x());
     y_.push_back(q.y());
