@@ -4,7 +4,7 @@
 While a simulated bag plays it pairs the nodelets' outputs with the simulator's truth by stamp:
   * /vertical_scan_ground/classified with /velodyne_points_truth (one `class` per point, same
     order): ground precision / recall and obstacle recall, with the truth mapping of
-    include/ladar_perception/ground/ground_evaluation.h (road, sidewalk, terrain = ground;
+    include/ladar_perception/eval/ground_evaluation.h (road, sidewalk, terrain = ground;
     curb face, car, wall, pole/tree, person, pothole = obstacle; unknown counts as a miss);
   * /hough_ground/ground_fit with /sick_vertical/scan and its truth: the fit error is the height
     of the true-ground returns of the scan above the fitted line (in the ground frame, through

@@ -44,8 +44,8 @@
 
 #include "ladar_perception/eval/phantom_holes.h"
 #include "ladar_perception/eval/real_ground_eval.h"
-#include "ladar_perception/ground/ground_evaluation.h"
-#include "ladar_perception/ground/hough_evaluation.h"
+#include "ladar_perception/eval/ground_evaluation.h"
+#include "ladar_perception/eval/hough_evaluation.h"
 #include "ladar_perception/ground/vertical_scan.h"
 #include "ladar_perception/io/image.h"
 #include "ladar_perception/io/kitti.h"

@@ -14,7 +14,7 @@
 
 #include <gtest/gtest.h>
 
-#include "ladar_perception/ground/ground_evaluation.h"
+#include "ladar_perception/eval/ground_evaluation.h"
 #include "ladar_perception/ground/vertical_scan.h"
 
 using namespace ladar_perception;

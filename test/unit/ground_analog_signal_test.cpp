@@ -8,7 +8,7 @@
 #include "ground_surface_scene.h"
 #include "ground_world_eval.h"
 #include "ladar_perception/ground/analog_signal.h"
-#include "ladar_perception/ground/ground_evaluation.h"
+#include "ladar_perception/eval/ground_evaluation.h"
 #include "ladar_perception/ground/ground_model.h"
 
 namespace lp = ladar_perception;

@@ -1,7 +1,7 @@
 // Negative obstacles scored per hole (evaluateHoles in ground_evaluation.h).
 #include <gtest/gtest.h>
 
-#include "ladar_perception/ground/ground_evaluation.h"
+#include "ladar_perception/eval/ground_evaluation.h"
 
 using namespace ladar_perception;
 

@@ -3,7 +3,7 @@
 // the vertical scan method, and on flat ground both are exact.
 #include <gtest/gtest.h>
 
-#include "ladar_perception/ground/hough_evaluation.h"
+#include "ladar_perception/eval/hough_evaluation.h"
 
 namespace lp = ladar_perception;
 

@@ -6,7 +6,7 @@
 
 #include "ground_surface_scene.h"
 #include "ground_world_eval.h"
-#include "ladar_perception/ground/ground_evaluation.h"
+#include "ladar_perception/eval/ground_evaluation.h"
 #include "ladar_perception/ground/ground_model.h"
 #include "ladar_perception/ground/plane_fit.h"
 #include "ladar_perception/ground/vertical_scan.h"

@@ -6,7 +6,7 @@
 
 #include <gtest/gtest.h>
 
-#include "ladar_perception/ground/ground_evaluation.h"
+#include "ladar_perception/eval/ground_evaluation.h"
 #include "ladar_perception/ground/ground_model.h"
 
 namespace ladar_perception {

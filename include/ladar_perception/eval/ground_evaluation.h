@@ -1,6 +1,7 @@
 // Accuracy of a ground model on the simulator's standard worlds with ground truth (the
-// accuracy test and the ground_eval tool share this one evaluation). Header-only so the ground
-// library itself does not depend on the simulator.
+// accuracy test and the ground_eval tool share this one evaluation). With the evaluation against
+// labelled real scans in eval/, not in the ground headers: the ground library does not depend on
+// the simulator. Header-only (used by tools and tests that link the simulator).
 //
 // Truth mapping: sim ground classes (road, sidewalk, terrain) = ground; obstacle classes
 // (curb face, car, wall, pole, person, pothole) = obstacle.

@@ -1,7 +1,7 @@
 // The Hough ground fit (3.3.4) against the 1-DOF vertical scan line on the simulated thesis
 // vehicle's vertical SICK LMS-291, with ground truth, and per-scan timing of any ground model:
 // the parts of ground_eval's comparison beyond the 3D models. Header-only, like
-// ground_evaluation.h, so the ground library does not depend on the simulator.
+// ground_evaluation.h (the ground library does not depend on the simulator).
 #pragma once
 
 #include <algorithm>
@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "ladar_perception/ground/ground_evaluation.h"
+#include "ladar_perception/eval/ground_evaluation.h"
 #include "ladar_perception/ground/hough_ground.h"
 #include "ladar_perception/sim/scan_simulator.h"
 #include "ladar_perception/sim/sensor_rig.h"
