@@ -211,39 +211,51 @@ std::string realGroundRangeTable(const std::vector<MethodScore>& methods) {
   return out;
 }
 
-bool writeRealErrorPng(const std::string& path, const LabelledFrame& frame,
-                       const std::vector<uint8_t>& called_ground, float sensor_height,
-                       std::string* error) {
-  PointCloudView view;
-  if (!frame.cloud.view(&view, error)) return false;
+bool writeOutcomePng(const std::string& path, const PointCloudView& view,
+                     const std::vector<PointOutcome>& outcome, std::string* error) {
   const int size = 1000;
   const float ppm = size / 80.f;
   RgbImage img(size, size, 10, 10, 14);
   // Correct returns first, errors on top so that they stay visible.
   for (int pass = 0; pass < 2; ++pass) {
-    for (std::size_t i = 0; i < view.size(); ++i) {
+    for (std::size_t i = 0; i < view.size() && i < outcome.size(); ++i) {
+      const PointOutcome o = outcome[i];
+      const bool wrong = o == PointOutcome::kMissedGround || o == PointOutcome::kFalseGround;
+      if (wrong != (pass == 1)) continue;
       const Eigen::Vector3f p = view.xyz(i);
       if (!p.allFinite()) continue;
-      const TruthRole role = truthRole(frame.classes[i], p.z(), sensor_height, GroundProtocol::kA);
-      const bool scored = role == TruthRole::kGround || role == TruthRole::kNonGround;
-      const bool ground = called_ground[i] != 0;
-      const bool wrong = scored && (ground != (role == TruthRole::kGround));
-      if (wrong != (pass == 1)) continue;
       uint8_t rgb[3] = {90, 90, 90};
-      if (!scored) {
-      } else if (!wrong) {
-        if (ground) { rgb[0] = 20; rgb[1] = 110; rgb[2] = 35; }
-        else { rgb[0] = 130; rgb[1] = 25; rgb[2] = 25; }
-      } else if (!ground) {
-        rgb[0] = 255; rgb[1] = 230; rgb[2] = 0;   // missed ground
-      } else {
-        rgb[0] = 255; rgb[1] = 0; rgb[2] = 255;   // false ground
+      switch (o) {
+        case PointOutcome::kGround: rgb[0] = 20; rgb[1] = 110; rgb[2] = 35; break;
+        case PointOutcome::kObstacle: rgb[0] = 130; rgb[1] = 25; rgb[2] = 25; break;
+        case PointOutcome::kMissedGround: rgb[0] = 255; rgb[1] = 230; rgb[2] = 0; break;
+        case PointOutcome::kFalseGround: rgb[0] = 255; rgb[1] = 0; rgb[2] = 255; break;
+        case PointOutcome::kUnscored: break;
       }
       img.set(static_cast<int>(size / 2 - p.y() * ppm), static_cast<int>(size / 2 - p.x() * ppm),
               rgb[0], rgb[1], rgb[2]);
     }
   }
   return writePng(path, img, error);
+}
+
+bool writeRealErrorPng(const std::string& path, const LabelledFrame& frame,
+                       const std::vector<uint8_t>& called_ground, float sensor_height,
+                       std::string* error) {
+  PointCloudView view;
+  if (!frame.cloud.view(&view, error)) return false;
+  std::vector<PointOutcome> outcome(view.size(), PointOutcome::kUnscored);
+  for (std::size_t i = 0; i < view.size(); ++i) {
+    const Eigen::Vector3f p = view.xyz(i);
+    if (!p.allFinite()) continue;
+    const TruthRole role = truthRole(frame.classes[i], p.z(), sensor_height, GroundProtocol::kA);
+    if (role != TruthRole::kGround && role != TruthRole::kNonGround) continue;
+    const bool truth_ground = role == TruthRole::kGround;
+    const bool ground = called_ground[i] != 0;
+    outcome[i] = truth_ground ? (ground ? PointOutcome::kGround : PointOutcome::kMissedGround)
+                              : (ground ? PointOutcome::kFalseGround : PointOutcome::kObstacle);
+  }
+  return writeOutcomePng(path, view, outcome, error);
 }
 
 }  // namespace eval

@@ -47,7 +47,6 @@
 #include "ladar_perception/eval/ground_evaluation.h"
 #include "ladar_perception/eval/hough_evaluation.h"
 #include "ladar_perception/ground/vertical_scan.h"
-#include "ladar_perception/io/image.h"
 #include "ladar_perception/io/kitti.h"
 
 using namespace ladar_perception;
@@ -308,8 +307,9 @@ int evaluatePhantomHoles(const std::string& dir, const std::string& frame_range,
 }
 }  // namespace
 
-// Top-down picture of the middle scan of the evaluation: correct ground dark green, correct
-// obstacle dark red, missed obstacle magenta, false obstacle yellow, unknown grey; 80 m wide.
+// Top-down picture of the middle scan of the evaluation (eval::writeOutcomePng): correct ground
+// dark green, correct obstacle dark red, missed obstacle magenta, false obstacle yellow,
+// unknown grey; 80 m wide.
 void writeErrorPng(const std::string& path, const std::string& world_name, GroundModel* model,
                    sim::NoiseProfile noise, int scans, uint32_t seed) {
   sim::World world;
@@ -327,31 +327,15 @@ void writeErrorPng(const std::string& path, const std::string& world_name, Groun
   pose.sensor_to_ground = mount.cast<float>();
   GroundClassification res;
   model->classify(view, pose, &res);
-  const int size = 1000;
-  const float ppm = size / 80.f;
-  RgbImage img(size, size, 10, 10, 14);
-  for (int pass = 0; pass < 2; ++pass) {
-    for (std::size_t i = 0; i < res.size(); ++i) {
-      const auto c = static_cast<sim::SurfaceClass>(scan.truth[i]);
-      const bool g = sim::isGroundClass(c);
-      const uint8_t l = res.labels[i];
-      const bool wrong = (g && l != kLabelGround) || (!g && l != kLabelObstacle);
-      if (wrong != (pass == 1)) continue;
-      uint8_t rgb[3] = {110, 110, 110};
-      if (l == kLabelUnknown) {
-      } else if (!wrong) {
-        rgb[0] = g ? 20 : 120; rgb[1] = g ? 90 : 20; rgb[2] = g ? 30 : 20;
-      } else if (g) {
-        rgb[0] = 255; rgb[1] = 230; rgb[2] = 0;
-      } else {
-        rgb[0] = 255; rgb[1] = 0; rgb[2] = 255;
-      }
-      const Eigen::Vector3f p = view.xyz(i);
-      img.set(static_cast<int>(size / 2 - p.y() * ppm), static_cast<int>(size / 2 - p.x() * ppm),
-              rgb[0], rgb[1], rgb[2]);
-    }
+  std::vector<eval::PointOutcome> outcome(res.size(), eval::PointOutcome::kUnscored);
+  for (std::size_t i = 0; i < res.size(); ++i) {
+    const bool g = sim::isGroundClass(static_cast<sim::SurfaceClass>(scan.truth[i]));
+    const uint8_t l = res.labels[i];
+    if (l == kLabelUnknown) continue;
+    outcome[i] = g ? (l == kLabelGround ? eval::PointOutcome::kGround : eval::PointOutcome::kMissedGround)
+                   : (l == kLabelObstacle ? eval::PointOutcome::kObstacle : eval::PointOutcome::kFalseGround);
   }
-  writePng(path, img, &error);
+  eval::writeOutcomePng(path, view, outcome, &error);
 }
 
 int main(int argc, char** argv) {

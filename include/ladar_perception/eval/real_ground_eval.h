@@ -69,9 +69,17 @@ std::string realGroundSummaryTable(const std::vector<MethodScore>& methods);
 std::string realGroundClassTable(const std::vector<MethodScore>& methods);
 std::string realGroundRangeTable(const std::vector<MethodScore>& methods);
 
-// Top-down picture of one frame's errors under protocol A, 80 m wide, x forward up: ground
-// called ground dark green, non-ground called obstacle dark red, missed ground (false obstacle)
-// yellow, false ground magenta, not scored grey.
+// What a return's label is against the truth, for the error pictures.
+enum class PointOutcome : uint8_t { kUnscored, kGround, kObstacle, kMissedGround, kFalseGround };
+
+// Top-down picture of a scan's outcomes, 80 m wide, 1000 px, x forward up: ground called ground
+// dark green, an obstacle called obstacle dark red, missed ground (a false obstacle) yellow,
+// false ground (a missed obstacle) magenta, not scored grey; the errors drawn over the rest.
+// The one picture of ground_eval's real and simulated modes.
+bool writeOutcomePng(const std::string& path, const PointCloudView& view,
+                     const std::vector<PointOutcome>& outcome, std::string* error);
+
+// The picture of one labelled frame's outcomes under protocol A.
 bool writeRealErrorPng(const std::string& path, const LabelledFrame& frame,
                        const std::vector<uint8_t>& called_ground, float sensor_height,
                        std::string* error);
