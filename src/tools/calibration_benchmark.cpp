@@ -1,4 +1,6 @@
 // calibration_benchmark: the thesis's calibration experiment (5.2.1) on the simulator.
+// (Over 600 lines: the experiment's statistics, its --diagnose report and the trace plot share
+// the trials' state; the calibration itself is calibrate() of the core.)
 // For each trial: 10 vehicle poses within 5 m and 0.5 rad, the reference sensor 2 m above the
 // ground at the origin, the target 1 m forward, an initial guess off by up to +-1 m and +-0.2 rad
 // per axis; then calibrate() with the chosen method. Prints per-DOF mean and standard deviation

@@ -1,5 +1,7 @@
 // ground_eval: accuracy of the ground models on the simulator's worlds with ground truth,
 // printed as a Markdown table (with the command line that produced it).
+// (Over 600 lines: one main for the tool's five modes, which share its argument parsing and
+// Markdown output; every score it prints is computed in the eval library.)
 //
 //   ground_eval [--worlds flat,urban,rural,hillside,potholes] [--method NAME[,NAME]]
 //               [--noise datasheet|table4.1|none] [--scans N] [--seed S] [--classes]

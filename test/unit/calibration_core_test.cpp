@@ -1,4 +1,5 @@
-// Unit tests of the calibration core on hand-made clouds (no simulator, no ROS).
+// Unit tests of the calibration core on hand-made clouds (no simulator, no ROS). Over 600
+// lines: one file for the core's stages, whose tests share the hand-made scenes.
 #include <gtest/gtest.h>
 
 #include <algorithm>

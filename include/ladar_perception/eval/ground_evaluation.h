@@ -1,3 +1,5 @@
+// (Over 600 lines: the simulator-world evaluation in one header, so that the accuracy tests
+// and ground_eval run the same code.)
 // Accuracy of a ground model on the simulator's standard worlds with ground truth (the
 // accuracy test and the ground_eval tool share this one evaluation). With the evaluation against
 // labelled real scans in eval/, not in the ground headers: the ground library does not depend on
