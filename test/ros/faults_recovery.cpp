@@ -37,26 +37,16 @@ using ladar_perception::rostest::waitFor;
 using ladar_perception::rostest::Counter;
 using ladar_perception::rostest::flatCloud;
 using ladar_perception::rostest::cloudMsg;
-
-geometry_msgs::TransformStamped transform(const std::string& parent, const std::string& child,
-                                          double z, ros::Time stamp) {
-  geometry_msgs::TransformStamped t;
-  t.header.stamp = stamp;
-  t.header.frame_id = parent;
-  t.child_frame_id = child;
-  t.transform.translation.z = z;
-  t.transform.rotation.w = 1.0;
-  return t;
-}
+using ladar_perception::rostest::mountTransform;
 
 class Faults : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     static tf2_ros::StaticTransformBroadcaster statics;
-    statics.sendTransform({transform("base_footprint", "velodyne", 1.8, ros::Time::now()),
-                           transform("odom", "base_link", 0.0, ros::Time::now()),
-                           transform("base_link", "velodyne_ref", 1.8, ros::Time::now()),
-                           transform("base_link", "velodyne_target", 1.9, ros::Time::now())});
+    statics.sendTransform({mountTransform("base_footprint", "velodyne", 1.8, ros::Time::now()),
+                           mountTransform("odom", "base_link", 0.0, ros::Time::now()),
+                           mountTransform("base_link", "velodyne_ref", 1.8, ros::Time::now()),
+                           mountTransform("base_link", "velodyne_target", 1.9, ros::Time::now())});
     static ros::AsyncSpinner spinner(4);
     spinner.start();
   }
@@ -88,8 +78,8 @@ TEST_F(Faults, TfLateNeverAndJumpingBack) {
   const ros::Time t = ros::Time::now();
   pub.publish(cloudMsg(cloud, "velodyne_moving", t));
   EXPECT_FALSE(waitFor([&] { return classified.count > 0; }, 0.5));
-  tf.sendTransform(transform("base_footprint", "velodyne_moving", 1.8, t - ros::Duration(0.05)));
-  tf.sendTransform(transform("base_footprint", "velodyne_moving", 1.8, t + ros::Duration(0.05)));
+  tf.sendTransform(mountTransform("base_footprint", "velodyne_moving", 1.8, t - ros::Duration(0.05)));
+  tf.sendTransform(mountTransform("base_footprint", "velodyne_moving", 1.8, t + ros::Duration(0.05)));
   ASSERT_TRUE(waitFor([&] { return classified.count == 1; })) << "the late scan was lost";
   EXPECT_EQ(adapter.health().errorCount("missing tf"), 0u);
 
@@ -121,8 +111,8 @@ TEST_F(Faults, TfLateNeverAndJumpingBack) {
   };
   for (int i = 0; i < 5; ++i) {
     const ros::Time s = back + ros::Duration(0.1 * i);
-    tf.sendTransform(transform("base_footprint", "velodyne_moving", 1.8, s - ros::Duration(0.05)));
-    tf.sendTransform(transform("base_footprint", "velodyne_moving", 1.8, s + ros::Duration(0.05)));
+    tf.sendTransform(mountTransform("base_footprint", "velodyne_moving", 1.8, s - ros::Duration(0.05)));
+    tf.sendTransform(mountTransform("base_footprint", "velodyne_moving", 1.8, s + ros::Duration(0.05)));
     const uint64_t before_scan = answered();
     pub.publish(cloudMsg(cloud, "velodyne_moving", s));
     waitFor([&] { return answered() > before_scan; }, 2.0);
@@ -140,8 +130,8 @@ TEST_F(Faults, TfLateNeverAndJumpingBack) {
       << adapter.health().errorCount("missing tf") - missing_before << " dropped";
   const int before = classified.count;
   const ros::Time fresh = ros::Time::now();
-  tf.sendTransform(transform("base_footprint", "velodyne_moving", 1.8, fresh - ros::Duration(0.05)));
-  tf.sendTransform(transform("base_footprint", "velodyne_moving", 1.8, fresh + ros::Duration(0.05)));
+  tf.sendTransform(mountTransform("base_footprint", "velodyne_moving", 1.8, fresh - ros::Duration(0.05)));
+  tf.sendTransform(mountTransform("base_footprint", "velodyne_moving", 1.8, fresh + ros::Duration(0.05)));
   pub.publish(cloudMsg(cloud, "velodyne_moving", fresh));
   pub.publish(cloudMsg(cloud, "velodyne", fresh));
   EXPECT_TRUE(waitFor([&] { return classified.count >= before + 2; }));
