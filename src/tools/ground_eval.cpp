@@ -323,6 +323,14 @@ struct SensorRow {
   long long instructions = -1;
 };
 
+// --mount-rpy R,P: the sensor rolled and pitched on its mount [deg] (SensorPose::fromMount); the
+// model is given the tilted pose, as tf would give it.
+void tiltMount(const std::vector<double>& rpy, EvaluationSensor* sensor) {
+  if (rpy.size() != 2) return;
+  const SensorPose tilted = SensorPose::fromMount(0.f, static_cast<float>(rpy[0]), static_cast<float>(rpy[1]));
+  sensor->mount.linear() = tilted.sensor_to_ground.linear().cast<double>();
+}
+
 double f1Of(const GroundAccuracy& a) {
   const double p = a.groundPrecision(), r = a.groundRecall();
   return p + r > 0.0 ? 2.0 * p * r / (p + r) : 0.0;
@@ -333,7 +341,7 @@ double f1Of(const GroundAccuracy& a) {
 // this program under callgrind in --callgrind-scan mode; -1 when valgrind is not there.
 long long countInstructions(const std::string& sensor, const std::string& world, const std::string& method,
                             const std::vector<std::string>& sets, const std::string& noise, int scans,
-                            uint32_t seed) {
+                            uint32_t seed, const std::vector<double>& mount_rpy) {
   char exe[4096];
   const ssize_t len = readlink("/proc/self/exe", exe, sizeof(exe) - 1);
   if (len <= 0) return -1;
@@ -346,6 +354,7 @@ long long countInstructions(const std::string& sensor, const std::string& world,
                     exe + " --callgrind-scan " + sensor + " --worlds " + world + " --method " + method +
                     " --noise " + noise + " --scans " + std::to_string(scans) + " --seed " + std::to_string(seed);
   for (const std::string& kv : sets) cmd += " --set " + kv;
+  if (mount_rpy.size() == 2) cmd += " --mount-rpy " + std::to_string(mount_rpy[0]) + "," + std::to_string(mount_rpy[1]);
   cmd += " > /dev/null 2>&1";
   long long total = -1;
   if (std::system(cmd.c_str()) == 0) {
@@ -361,7 +370,8 @@ long long countInstructions(const std::string& sensor, const std::string& world,
 
 // --callgrind-scan SENSOR: one instrumented classify call on the middle scan of the first world.
 int callgrindScan(const std::string& sensor_name, const std::string& world_name, const std::string& method,
-                  const std::vector<std::string>& sets, sim::NoiseProfile noise, int scans, uint32_t seed) {
+                  const std::vector<std::string>& sets, sim::NoiseProfile noise, int scans, uint32_t seed,
+                  const std::vector<double>& mount_rpy) {
   EvaluationSensor sensor;
   std::string error;
   sim::World world;
@@ -370,6 +380,7 @@ int callgrindScan(const std::string& sensor_name, const std::string& world_name,
     std::cerr << "ground_eval: " << error << "\n";
     return 2;
   }
+  tiltMount(mount_rpy, &sensor);
   std::unique_ptr<GroundModel> model = makeModel(method, sets, &error);
   if (!model) { std::cerr << "ground_eval: " << error << "\n"; return 2; }
   model->setLidarModel(sensor.lidar);
@@ -392,7 +403,8 @@ int callgrindScan(const std::string& sensor_name, const std::string& world_name,
 int evaluateSensorTable(const std::vector<std::string>& sensors, const std::vector<std::string>& worlds,
                         const std::vector<std::string>& methods, const std::vector<std::string>& sets,
                         const std::string& noise_name, sim::NoiseProfile noise, int scans, uint32_t seed,
-                        bool instructions, const std::string& cmdline, std::string* markdown) {
+                        bool instructions, const std::vector<double>& mount_rpy, const std::string& cmdline,
+                        std::string* markdown) {
   std::vector<SensorRow> rows;
   int status = 0;
   for (const std::string& s : sensors) {
@@ -402,6 +414,7 @@ int evaluateSensorTable(const std::vector<std::string>& sensors, const std::vect
       std::cerr << "ground_eval: " << error << "\n";
       return 2;
     }
+    tiltMount(mount_rpy, &sensor);
     for (const std::string& m : methods) {
       std::unique_ptr<GroundModel> model = makeModel(m, sets, &error);
       if (!model) { std::cerr << "ground_eval: " << error << "\n"; return 2; }
@@ -422,7 +435,7 @@ int evaluateSensorTable(const std::vector<std::string>& sensors, const std::vect
         returns = row.acc.points;
         row.points_per_scan = static_cast<double>(returns) / std::max<std::size_t>(row.acc.scans, 1);
         row.ms = medianMs(timed.milliseconds());
-        if (instructions) row.instructions = countInstructions(s, w, m, sets, noise_name, scans, seed);
+        if (instructions) row.instructions = countInstructions(s, w, m, sets, noise_name, scans, seed, mount_rpy);
         std::fprintf(stderr, "%s %s %s: F1 %.2f%%\n", s.c_str(), w.c_str(), row.method.c_str(), 100.0 * f1Of(row.acc));
         rows.push_back(row);
       }
@@ -518,6 +531,7 @@ int main(int argc, char** argv) {
   std::vector<std::string> sensors;                // --sensor NAME[,NAME] | all: the per-sensor table
   bool instructions = false;                      // --instructions: callgrind counts in that table
   std::string callgrind_sensor;                   // --callgrind-scan SENSOR (used by --instructions)
+  std::vector<double> mount_rpy;                  // --mount-rpy R,P [deg] of the --sensor table
   std::string cmdline = "ground_eval";
   for (int i = 1; i < argc; ++i) cmdline += std::string(" ") + argv[i];
   for (int i = 1; i < argc; ++i) {
@@ -560,6 +574,10 @@ int main(int argc, char** argv) {
       }
     }
     else if (a == "--instructions") instructions = true;
+    else if (a == "--mount-rpy") {
+      for (const std::string& v : split(next())) mount_rpy.push_back(std::atof(v.c_str()));
+      if (mount_rpy.size() != 2) { std::cerr << "ground_eval: --mount-rpy needs R,P in degrees\n"; return 2; }
+    }
     else if (a == "--callgrind-scan") callgrind_sensor = next();
     else if (a == "--markdown") markdown_path = next();
     else {
@@ -570,7 +588,7 @@ int main(int argc, char** argv) {
              "[--noise datasheet|table4.1|none] [--scans N] [--seed S] [--classes] [--set key=value]... "
              "[--png-errors PREFIX] [--sick-scans N] [--at-ground-band M] [--height-bound] [--region-bound] [--region-seed-kept F] [--misses] [--markdown OUT]\n"
              "       ground_eval --sensor NAME[,NAME]|all [--worlds a,b] [--method m1,m2] [--noise N] [--scans N] [--seed S] "
-             "[--set key=value]... [--instructions] [--markdown OUT]\n"
+             "[--set key=value]... [--mount-rpy R,P] [--instructions] [--markdown OUT]\n"
              "       ground_eval --semantickitti DIR [--frames a:b] [--sensor-height M] [--method m1,m2] [--set key=value]... "
              "[--compare-masks NAME=MASK_DIR]... [--png-errors PREFIX] [--markdown OUT]\n"
              "       ground_eval --holes [--worlds a,b] [--method m1,m2] [--noise N] [--scans N] [--seed S] [--markdown OUT]\n"
@@ -580,7 +598,8 @@ int main(int argc, char** argv) {
              "    under protocols A and B, by class and by range; --compare-masks scores another program's\n"
              "    MASK_DIR/NNNNNN.mask (one byte per return, 1 = ground) in the same run\n"
              "  --sensor: the per-sensor table (sensor x world x method: P/R/F1, obstacle recall, ms per scan;\n"
-             "    --instructions adds callgrind's instructions per scan and per return), default worlds urban,rural,\n"
+             "    --instructions adds callgrind's instructions per scan and per return; --mount-rpy tilts the\n"
+             "    sensor on its mount [deg]), default worlds urban,rural,\n"
              "    default method vertical_scan; sensors: " + lidarModelNames() + "\n"
              "  --holes: negative obstacles per hole (>= 25 cm across, >= 5 cm deep, within 30 m, in sight)\n"
              "  --phantom-holes KITTI_DIR: holes reported on real road (clusters below the local ground, no object)\n"
@@ -605,13 +624,13 @@ int main(int argc, char** argv) {
   const bool default_worlds = worlds == sim::standardWorldNames();
   const bool default_methods = methods == groundModelNames();
   if (!callgrind_sensor.empty()) {
-    return callgrindScan(callgrind_sensor, worlds.front(), methods.front(), sets, noise, scans, seed);
+    return callgrindScan(callgrind_sensor, worlds.front(), methods.front(), sets, noise, scans, seed, mount_rpy);
   }
   if (!sensors.empty()) {
     if (default_worlds) worlds = {"urban", "rural"};
     if (default_methods) methods = {"vertical_scan"};
     const int status = evaluateSensorTable(sensors, worlds, methods, sets, noise_name, noise, scans, seed,
-                                           instructions, cmdline, &markdown);
+                                           instructions, mount_rpy, cmdline, &markdown);
     if (status == 0 && !markdown_path.empty() && !writeTextFile(markdown_path, markdown)) return 1;
     return status;
   }
