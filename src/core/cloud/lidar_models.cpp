@@ -230,7 +230,7 @@ std::string checkCloudAgainstLidarModel(const PointCloudView& view, const LidarM
       max_ring = std::max(max_ring, ring);
       if (ring < 1024) seen.set(static_cast<std::size_t>(ring));
     }
-    if (valid < 500) return "";
+    if (valid < 200) return "";
     const int distinct = static_cast<int>(seen.count());
     const char* source = ringSourceName(view.ringSource());
     if (distinct > beams || max_ring >= 2 * beams || 2 * distinct < beams) {
@@ -241,10 +241,10 @@ std::string checkCloudAgainstLidarModel(const PointCloudView& view, const LidarM
     }
     return "";
   }
-  // Elevation histogram in 0.5 degree cells over (-90, 90).
+  // Elevation histogram in 0.5 degree cells over (-90, 90), every 31st return (an atan2 each).
   std::array<uint32_t, 360> hist{};
   std::size_t valid = 0;
-  for (std::size_t i = 0; i < n; i += 7) {
+  for (std::size_t i = 0; i < n; i += 31) {
     const Eigen::Vector3f p = view.xyz(i);
     const float r = std::sqrt(p.x() * p.x() + p.y() * p.y());
     if (!p.allFinite() || !(r > 0.5f)) continue;
@@ -253,7 +253,7 @@ std::string checkCloudAgainstLidarModel(const PointCloudView& view, const LidarM
     ++hist[cell];
     ++valid;
   }
-  if (valid < 500) return "";
+  if (valid < 200) return "";
   const std::size_t lo_count = valid / 50, hi_count = valid - valid / 50;
   std::size_t acc = 0;
   int lo = -1, hi = -1;
