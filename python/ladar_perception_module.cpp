@@ -506,7 +506,7 @@ PYBIND11_MODULE(_core, m) {
                       "Laser elevations [deg] for rows when no ring is given; empty = the HDL-64E table.");
   params.def("__getitem__", [](const VerticalScanParams& p, const std::string& k) { return getParam(p, k); });
   params.def("__setitem__", [](VerticalScanParams& p, const std::string& k, const py::object& v) { setParam(&p, k, v); });
-  params.def("keys", []() {
+  params.def("keys", [](const VerticalScanParams&) {
     std::vector<std::string> k;
     for (const ParamInfo& info : verticalScanParamTable()) k.push_back(info.name);
     return k;
