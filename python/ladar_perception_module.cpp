@@ -74,24 +74,12 @@ bool fieldTypeOf(const py::dtype& dt, FieldType* type) {
   return true;
 }
 
-// Index of the first point whose x, y or z is NaN or Inf, or n when all are finite.
-// float32 rows of `stride` floats, x y z first. Eight lanes so that the compiler vectorises it:
-// v * 0 is 0 for a finite v and NaN otherwise.
-std::size_t firstNonFinite(const float* p, std::size_t n, std::size_t stride) {
-  constexpr std::size_t kBlock = 1024;
-  for (std::size_t start = 0; start < n; start += kBlock) {
-    const std::size_t end = std::min(n, start + kBlock);
-    float acc = 0.f;
-    for (std::size_t i = start; i < end; ++i) {
-      const float* q = p + i * stride;
-      acc += q[0] * 0.f + q[1] * 0.f + q[2] * 0.f;
-    }
-    if (acc != 0.f) {  // NaN somewhere in this block: find it
-      for (std::size_t i = start; i < end; ++i) {
-        const float* q = p + i * stride;
-        if (!std::isfinite(q[0]) || !std::isfinite(q[1]) || !std::isfinite(q[2])) return i;
-      }
-    }
+// Index of the first return labelled unknown whose x, y or z is NaN or Inf, else view.size().
+std::size_t firstNonFinite(const PointCloudView& view, const GroundClassification& result) {
+  const uint8_t* labels = result.labels.data();
+  const std::size_t n = view.size();
+  for (std::size_t i = 0; i < n; ++i) {
+    if (labels[i] == kLabelUnknown && !view.xyz(i).allFinite()) return i;
   }
   return n;
 }
@@ -106,8 +94,7 @@ std::size_t firstNonFinite(const float* p, std::size_t n, std::size_t stride) {
 // intensity, ...) and float32 C-contiguous (N, 3|4) arrays are viewed in place; other dtypes
 // and layouts are converted to float32 C order once; a ring array is packed with x, y, z into
 // one buffer (one copy). ValueError for anything the core cannot read.
-void viewPoints(const py::object& points, const py::object& ring, bool allow_nonfinite,
-                NumpyCloud* cloud) {
+void viewPoints(const py::object& points, const py::object& ring, NumpyCloud* cloud) {
   if (!py::isinstance<py::array>(points)) {
     throw py::value_error("points must be a NumPy array of shape (N, 3) or (N, 4), got " +
                           std::string(py::str(points.get_type())));
@@ -212,21 +199,6 @@ void viewPoints(const py::object& points, const py::object& ring, bool allow_non
   if (!PointCloudView::create(data, data_size, layout, &cloud->view, &error)) {
     throw py::value_error("points: " + error);
   }
-  if (!allow_nonfinite) {
-    std::size_t bad;
-    if (cloud->view.packedFloatXYZ() && findField(layout, "x")->offset == 0 &&
-        findField(layout, "y")->offset == 4 && findField(layout, "z")->offset == 8 &&
-        layout.point_step % 4 == 0 && reinterpret_cast<uintptr_t>(data) % 4 == 0) {
-      py::gil_scoped_release release;
-      bad = firstNonFinite(reinterpret_cast<const float*>(data), n, layout.point_step / 4);
-    } else {
-      bad = n;
-      for (std::size_t i = 0; i < n; ++i) {
-        if (!cloud->view.xyz(i).allFinite()) { bad = i; break; }
-      }
-    }
-    if (bad < n) nonFiniteError(bad);
-  }
 }
 
 SensorPose poseFrom(const py::object& sensor_height, const py::object& sensor_to_ground) {
@@ -248,27 +220,67 @@ SensorPose poseFrom(const py::object& sensor_height, const py::object& sensor_to
   return SensorPose::fromHeight(h);
 }
 
+// Result buffers that NumPy has let go of, for the next call: a loop over scans then reuses
+// warm memory as the C++ tools do (one GroundClassification per stream) instead of allocating
+// and faulting in fresh pages for every scan.
+struct ResultPool {
+  std::mutex mutex;
+  std::vector<std::unique_ptr<GroundClassification>> free;
+
+  std::unique_ptr<GroundClassification> take() {
+    std::lock_guard<std::mutex> lock(mutex);
+    if (free.empty()) return std::make_unique<GroundClassification>();
+    auto r = std::move(free.back());
+    free.pop_back();
+    return r;
+  }
+  void give(std::unique_ptr<GroundClassification> r) {
+    std::lock_guard<std::mutex> lock(mutex);
+    if (free.size() < 2) free.push_back(std::move(r));
+  }
+};
+
+// What the labels and P(obstacle) arrays own: the core's result, returned to the pool when
+// both arrays are gone.
+struct PooledResult {
+  std::shared_ptr<ResultPool> pool;
+  std::unique_ptr<GroundClassification> result;
+};
+
 // A ground model of the core and the lock that keeps one call at a time in its workspace.
 struct PyGroundModel {
   std::unique_ptr<GroundModel> model;
   std::mutex mutex;
   float sensor_height = kKittiSensorHeight;
+  std::shared_ptr<ResultPool> pool = std::make_shared<ResultPool>();
 
   py::tuple segment(const py::object& points, const py::object& ring, const py::object& sensor_height,
                     const py::object& sensor_to_ground, bool allow_nonfinite) {
     NumpyCloud cloud;
-    viewPoints(points, ring, allow_nonfinite, &cloud);
+    viewPoints(points, ring, &cloud);
     const SensorPose pose = poseFrom(sensor_height.is_none() ? py::cast(this->sensor_height) : sensor_height,
                                      sensor_to_ground);
-    auto result = std::make_unique<GroundClassification>();
+    auto owned = std::make_unique<PooledResult>();
+    owned->pool = pool;
+    owned->result = pool->take();
+    GroundClassification* result = owned->result.get();
+    std::size_t non_finite = cloud.size;
     if (cloud.size > 0) {
       py::gil_scoped_release release;
       std::lock_guard<std::mutex> lock(mutex);
-      model->classify(cloud.view, pose, result.get());
+      model->classify(cloud.view, pose, result);
+      // Every model labels a NaN/Inf return unknown (GroundModel::classify), so only the
+      // unknown returns are looked at: no pass over all the points before the core call.
+      if (!allow_nonfinite) non_finite = firstNonFinite(cloud.view, *result);
     }
+    if (non_finite < cloud.size) nonFiniteError(non_finite);
     // NumPy owns the core's result buffers (no copy).
-    GroundClassification* res = result.release();
-    py::capsule owner(res, [](void* p) { delete static_cast<GroundClassification*>(p); });
+    if (cloud.size == 0) result->resize(0);
+    GroundClassification* res = result;
+    py::capsule owner(owned.release(), [](void* p) {
+      std::unique_ptr<PooledResult> r(static_cast<PooledResult*>(p));
+      r->pool->give(std::move(r->result));
+    });
     const py::ssize_t n = static_cast<py::ssize_t>(res->size());
     py::array_t<uint8_t> labels({n}, {py::ssize_t(1)}, res->labels.data(), owner);
     py::array_t<float> p_obstacle({n}, {py::ssize_t(sizeof(float))}, res->p_obstacle.data(), owner);
@@ -640,7 +652,7 @@ PYBIND11_MODULE(_core, m) {
   m.def("score_ground", [](const py::object& points, const py::object& classes, const py::object& labels,
                            float sensor_height, const std::string& protocol) {
           NumpyCloud cloud;
-          viewPoints(points, py::none(), true, &cloud);
+          viewPoints(points, py::none(), &cloud);
           const std::vector<uint16_t> cls = classesFrom(classes, cloud.size);
           const std::vector<uint8_t> called = calledGroundFrom(labels, cloud.size);
           if (!std::isfinite(sensor_height) || sensor_height <= 0.f) throw py::value_error("sensor_height must be > 0 [m]");
@@ -690,7 +702,7 @@ PYBIND11_MODULE(_core, m) {
   m.def("write_outcome_png", [](const std::string& path, const py::object& points, const py::object& classes,
                                 const py::object& labels, float sensor_height) {
           NumpyCloud cloud;
-          viewPoints(points, py::none(), true, &cloud);
+          viewPoints(points, py::none(), &cloud);
           eval::LabelledFrame frame;
           frame.classes = classesFrom(classes, cloud.size);
           const std::vector<uint8_t> called = calledGroundFrom(labels, cloud.size);

@@ -114,6 +114,23 @@ def test_nan_raises_unless_allowed(urban):
         model.segment(bad)
     labels, p = model.segment(bad, allow_nonfinite=True)
     assert labels[777] == lp.LABEL_UNKNOWN and p[777] == 0.0
+    bad[5, 1] = -np.inf
+    for name in lp.ground_model_names():  # every model: the check relies on their unknown label
+        with pytest.raises(ValueError, match="row 5"):
+            lp.GroundModel(name).segment(bad)
+        labels, _ = lp.GroundModel(name).segment(bad, allow_nonfinite=True)
+        assert labels[5] == labels[777] == lp.LABEL_UNKNOWN, name
+
+
+def test_results_of_earlier_calls_are_kept(urban):
+    points, _, _ = urban
+    model = lp.VerticalScanGround()
+    first, p_first = model.segment(points)
+    kept, p_kept = first.copy(), p_first.copy()
+    for _ in range(3):  # later calls reuse only buffers no array holds any more
+        model.segment(points[: len(points) // 2])
+        model.segment(np.zeros((100, 3), np.float32))
+    assert np.array_equal(first, kept) and np.array_equal(p_first, p_kept)
 
 
 def test_empty_cloud():
