@@ -102,10 +102,11 @@ void viewPoints(const py::object& points, const py::object& ring, NumpyCloud* cl
   py::array arr = py::reinterpret_borrow<py::array>(points);
   const py::dtype dt = arr.dtype();
   CloudLayout& layout = cloud->layout;
-  if (!dt.attr("isnative").cast<bool>()) {
-    throw py::value_error("points must be in the machine's byte order (use points.astype(points.dtype.newbyteorder('=')))");
-  }
   if (!dt.attr("names").is_none()) {
+    if (!dt.attr("isnative").cast<bool>()) {
+      throw py::value_error("a structured points array must be in the machine's byte order "
+                            "(points.astype(points.dtype.newbyteorder('=')))");
+    }
     // A structured array: its fields are the cloud's fields, read in place.
     if (arr.ndim() != 1) throw py::value_error("a structured points array must be 1-D, got shape " + shapeText(arr));
     if (!ring.is_none()) throw py::value_error("ring= is for (N, 3|4) arrays; a structured array carries a 'ring' field");

@@ -70,6 +70,7 @@ def test_other_dtypes_and_layouts_are_converted(urban):
     reference, _ = model.segment(points)
     assert np.array_equal(model.segment(points.astype(np.float64))[0], reference)
     assert np.array_equal(model.segment(np.asfortranarray(points))[0], reference)
+    assert np.array_equal(model.segment(points.astype(">f4"))[0], reference)  # byte order
     assert np.array_equal(model.segment(points[:, :3])[0], reference)        # strided view
     assert np.array_equal(model.segment(points[::2])[0], model.segment(points[::2].copy())[0])
 
