@@ -2,6 +2,8 @@
 // (ground, sim, eval, io); nothing of the core is copied here. An (N, 3|4) float32 C-contiguous
 // array is read in place through a PointCloudView; the labels and P(obstacle) are the core's
 // own result buffers handed to NumPy. The core calls run without the GIL.
+// (Over 600 lines: one compiled module for one import; its functions are argument checks and
+// NumPy conversions around core calls, and the definitions with their docstrings.)
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
