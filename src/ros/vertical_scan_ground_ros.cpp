@@ -42,6 +42,27 @@ VerticalScanGroundRos::VerticalScanGroundRos(ros::NodeHandle nh, ros::NodeHandle
     : nh_(nh), private_nh_(private_nh), health_("VerticalScanGround") {
   ground_frame_ = private_nh_.param<std::string>("ground_frame", "base_footprint");
   use_tf_ = private_nh_.param("use_tf", true);
+  mount_roll_deg_ = static_cast<float>(private_nh_.param("mount_roll_deg", 0.0));
+  mount_pitch_deg_ = static_cast<float>(private_nh_.param("mount_pitch_deg", 0.0));
+  // The sensor: ~laser_elevations_deg (a user's own table) over ~sensor_model (a name of the
+  // lidar table); an unusable value is reported and the HDL-64E used.
+  lidar_ = *findLidarModel("hdl64e");
+  std::vector<double> elevations;
+  const std::string sensor_model = private_nh_.param<std::string>("sensor_model", "hdl64e");
+  if (private_nh_.getParam("laser_elevations_deg", elevations)) {
+    std::string error;
+    LidarModel custom;
+    if (lidarModelFromElevations(std::vector<float>(elevations.begin(), elevations.end()), &custom, &error)) {
+      lidar_ = custom;
+    } else {
+      health_.error("bad parameter", error + "; using sensor_model hdl64e");
+    }
+  } else if (const LidarModel* m = findLidarModel(sensor_model)) {
+    lidar_ = *m;
+  } else {
+    health_.error("bad parameter", "sensor_model '" + sensor_model + "' is none of " + lidarModelNames() +
+                                       "; using hdl64e");
+  }
   const int queue_size = private_nh_.param("queue_size", 3);
   const double tf_tolerance = private_nh_.param("tf_tolerance", 0.0);
 
@@ -60,9 +81,9 @@ VerticalScanGroundRos::VerticalScanGroundRos(ros::NodeHandle nh, ros::NodeHandle
   input_.reset(new SensorInput<sensor_msgs::PointCloud2>(
       nh_, "points", use_tf_, ground_frame_, queue_size, tf_tolerance, &health_,
       [this](const sensor_msgs::PointCloud2ConstPtr& m) { process(m); }));
-  ROS_INFO("VerticalScanGround: listening on %s, ground frame %s%s",
+  ROS_INFO("VerticalScanGround: listening on %s, ground frame %s%s, sensor %s (%d beams)",
            nh_.resolveName("points").c_str(), ground_frame_.c_str(),
-           use_tf_ ? "" : " (tf off: fixed sensor_height)");
+           use_tf_ ? "" : " (tf off: fixed sensor_height and mount)", lidar_.name.c_str(), lidar_.beams());
 }
 
 VerticalScanGroundRos::~VerticalScanGroundRos() {
@@ -75,26 +96,29 @@ sensor_msgs::PointCloud2ConstPtr VerticalScanGroundRos::lastClassified() const {
 }
 
 std::unique_ptr<GroundModel> VerticalScanGroundRos::makeModel(const VerticalScanGroundConfig& config) {
+  std::unique_ptr<GroundModel> model;
   if (config.method == "default" || config.method == "thesis") {
     if (config.curb_policy != "obstacle" && config.curb_policy != "ground") {
       health_.error("bad parameter", "curb_policy '" + config.curb_policy +
                                          "' is neither obstacle nor ground; curbs are obstacles");
     }
-    return makeVerticalScanModel(toVerticalScanParams(config));
+    model = makeVerticalScanModel(toVerticalScanParams(config));
+  } else {
+    // The thesis's baselines and the per-column Hough fit, with their own settings.
+    std::string error;
+    model = makeGroundModel(config.method, &error);
+    if (!model) {
+      health_.error("bad parameter", error + "; using the default method");
+      model = makeVerticalScanModel(verticalScanDefaultParams());
+    }
   }
-  // The thesis's baselines and the per-column Hough fit, with their own settings.
-  std::string error;
-  std::unique_ptr<GroundModel> model = makeGroundModel(config.method, &error);
-  if (!model) {
-    health_.error("bad parameter", error + "; using the default method");
-    model = makeVerticalScanModel(verticalScanDefaultParams());
-  }
+  model->setLidarModel(lidar_);
   return model;
 }
 
 bool VerticalScanGroundRos::sensorPose(const sensor_msgs::PointCloud2& msg, SensorPose* pose) {
   if (!use_tf_) {
-    *pose = SensorPose::fromHeight(sensor_height_);
+    *pose = SensorPose::fromMount(sensor_height_, mount_roll_deg_, mount_pitch_deg_);
     return true;
   }
   return sensorPoseFromTf(input_->buffer(), ground_frame_, msg.header, &health_, pose);
@@ -120,6 +144,11 @@ void VerticalScanGroundRos::process(const sensor_msgs::PointCloud2ConstPtr& msg)
                   "frame '" + msg->header.frame_id + "': " + error);
     return;
   }
+  // A cloud that cannot come from the configured sensor is still classified (rows from its
+  // ring field or the nearest beam), and the mismatch reported.
+  const std::string mismatch = checkCloudAgainstLidarModel(view, lidar_);
+  if (!mismatch.empty()) health_.error("sensor model mismatch", mismatch);
+  rows_from_.store(view.hasRing() ? ringSourceName(view.ringSource()) : "elevation table");
   SensorPose pose;
   if (!sensorPose(*msg, &pose)) return;
 
@@ -148,6 +177,8 @@ void VerticalScanGroundRos::process(const sensor_msgs::PointCloud2ConstPtr& msg)
 void VerticalScanGroundRos::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) {
   health_.fillDiagnostics(status);
   status.add("method", reconfigure_->current().method);
+  status.add("sensor model", lidar_.name + " (" + std::to_string(lidar_.beams()) + " beams)");
+  status.add("rows from", std::string(rows_from_.load()));
   status.add("ground frame", use_tf_ ? ground_frame_ : std::string("(tf off)"));
 }
 

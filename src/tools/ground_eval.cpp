@@ -43,6 +43,8 @@
 #include <vector>
 
 #include <dirent.h>
+#include <unistd.h>
+#include <valgrind/callgrind.h>
 
 #include "ladar_perception/eval/phantom_holes.h"
 #include "ladar_perception/eval/real_ground_eval.h"
@@ -309,6 +311,171 @@ int evaluatePhantomHoles(const std::string& dir, const std::string& frame_range,
 }
 }  // namespace
 
+// The per-sensor table (--sensor): every sensor x world x method on the evaluation's scans,
+// with P/R/F1, obstacle recall, the median time per scan and, with --instructions, the
+// instructions of one classify call (callgrind, one run per sensor and world: the middle scan).
+struct SensorRow {
+  std::string sensor, world, method;
+  int beams = 0;
+  GroundAccuracy acc;
+  double ms = 0.0;
+  double points_per_scan = 0.0;
+  long long instructions = -1;
+};
+
+// --mount-rpy R,P: the sensor rolled and pitched on its mount [deg] (SensorPose::fromMount); the
+// model is given the tilted pose, as tf would give it.
+void tiltMount(const std::vector<double>& rpy, EvaluationSensor* sensor) {
+  if (rpy.size() != 2) return;
+  const SensorPose tilted = SensorPose::fromMount(0.f, static_cast<float>(rpy[0]), static_cast<float>(rpy[1]));
+  sensor->mount.linear() = tilted.sensor_to_ground.linear().cast<double>();
+}
+
+double f1Of(const GroundAccuracy& a) {
+  const double p = a.groundPrecision(), r = a.groundRecall();
+  return p + r > 0.0 ? 2.0 * p * r / (p + r) : 0.0;
+}
+
+// Instructions of one cold classify call on the middle scan (the budget's convention: the first
+// call of a fresh model, as ground_vertical_scan_bench --callgrind-once), counted by running
+// this program under callgrind in --callgrind-scan mode; -1 when valgrind is not there.
+long long countInstructions(const std::string& sensor, const std::string& world, const std::string& method,
+                            const std::vector<std::string>& sets, const std::string& noise, int scans,
+                            uint32_t seed, const std::vector<double>& mount_rpy) {
+  char exe[4096];
+  const ssize_t len = readlink("/proc/self/exe", exe, sizeof(exe) - 1);
+  if (len <= 0) return -1;
+  exe[len] = 0;
+  char tmp[] = "/tmp/ground_eval_callgrind_XXXXXX";
+  const int fd = mkstemp(tmp);
+  if (fd < 0) return -1;
+  close(fd);
+  std::string cmd = "valgrind --tool=callgrind --instr-atstart=no --callgrind-out-file=" + std::string(tmp) + " " +
+                    exe + " --callgrind-scan " + sensor + " --worlds " + world + " --method " + method +
+                    " --noise " + noise + " --scans " + std::to_string(scans) + " --seed " + std::to_string(seed);
+  for (const std::string& kv : sets) cmd += " --set " + kv;
+  if (mount_rpy.size() == 2) cmd += " --mount-rpy " + std::to_string(mount_rpy[0]) + "," + std::to_string(mount_rpy[1]);
+  cmd += " > /dev/null 2>&1";
+  long long total = -1;
+  if (std::system(cmd.c_str()) == 0) {
+    std::ifstream f(tmp);
+    std::string line;
+    while (std::getline(f, line)) {
+      if (line.rfind("summary:", 0) == 0 || line.rfind("totals:", 0) == 0) total = std::atoll(line.c_str() + line.find(':') + 1);
+    }
+  }
+  std::remove(tmp);
+  return total;
+}
+
+// --callgrind-scan SENSOR: one instrumented classify call on the middle scan of the first world.
+int callgrindScan(const std::string& sensor_name, const std::string& world_name, const std::string& method,
+                  const std::vector<std::string>& sets, sim::NoiseProfile noise, int scans, uint32_t seed,
+                  const std::vector<double>& mount_rpy) {
+  EvaluationSensor sensor;
+  std::string error;
+  sim::World world;
+  if (!makeEvaluationSensor(sensor_name, noise, &sensor, &error) ||
+      !sim::makeStandardWorld(world_name, seed, &world, &error)) {
+    std::cerr << "ground_eval: " << error << "\n";
+    return 2;
+  }
+  tiltMount(mount_rpy, &sensor);
+  std::unique_ptr<GroundModel> model = makeModel(method, sets, &error);
+  if (!model) { std::cerr << "ground_eval: " << error << "\n"; return 2; }
+  model->setLidarModel(sensor.lidar);
+  const int k = scans / 2;
+  const double t = world.driveDuration() * (k + 0.5) / scans;
+  sim::SimulatedScan scan;
+  sim::simulateVelodyneRevolution(world, world.drivePose(t) * sensor.mount, sensor.model, seed * 1000u + k, &scan);
+  PointCloudView view;
+  if (!scan.cloud.view(&view, &error)) return 1;
+  SensorPose pose;
+  pose.sensor_to_ground = sensor.mount.cast<float>();
+  GroundClassification result;
+  CALLGRIND_START_INSTRUMENTATION;
+  model->classify(view, pose, &result);
+  CALLGRIND_STOP_INSTRUMENTATION;
+  std::printf("%zu points\n", view.size());
+  return 0;
+}
+
+int evaluateSensorTable(const std::vector<std::string>& sensors, const std::vector<std::string>& worlds,
+                        const std::vector<std::string>& methods, const std::vector<std::string>& sets,
+                        const std::string& noise_name, sim::NoiseProfile noise, int scans, uint32_t seed,
+                        bool instructions, const std::vector<double>& mount_rpy, const std::string& cmdline,
+                        std::string* markdown) {
+  std::vector<SensorRow> rows;
+  int status = 0;
+  for (const std::string& s : sensors) {
+    EvaluationSensor sensor;
+    std::string error;
+    if (!makeEvaluationSensor(s, noise, &sensor, &error)) {
+      std::cerr << "ground_eval: " << error << "\n";
+      return 2;
+    }
+    tiltMount(mount_rpy, &sensor);
+    for (const std::string& m : methods) {
+      std::unique_ptr<GroundModel> model = makeModel(m, sets, &error);
+      if (!model) { std::cerr << "ground_eval: " << error << "\n"; return 2; }
+      TimedGroundModel timed(model.get());
+      for (const std::string& w : worlds) {
+        SensorRow row;
+        row.sensor = s;
+        row.world = w;
+        row.method = model->name();
+        row.beams = sensor.lidar.beams();
+        timed.reset();
+        std::size_t returns = 0;
+        if (!evaluateGroundModel(sensor, w, &timed, scans, seed, &row.acc, &error)) {
+          std::cerr << "ground_eval: " << s << " " << w << ": " << error << "\n";
+          status = 1;
+          continue;
+        }
+        returns = row.acc.points;
+        row.points_per_scan = static_cast<double>(returns) / std::max<std::size_t>(row.acc.scans, 1);
+        row.ms = medianMs(timed.milliseconds());
+        if (instructions) row.instructions = countInstructions(s, w, m, sets, noise_name, scans, seed, mount_rpy);
+        std::fprintf(stderr, "%s %s %s: F1 %.2f%%\n", s.c_str(), w.c_str(), row.method.c_str(), 100.0 * f1Of(row.acc));
+        rows.push_back(row);
+      }
+    }
+  }
+  std::string& out = *markdown;
+  char buf[1024];
+  out += "`" + cmdline + "`\n\n";
+  out += "| sensor | beams | world | method | scans | returns per scan | ground precision | ground recall | F1 | "
+         "obstacle recall | median ms/scan | instructions/scan | instructions/return |\n"
+         "|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+  for (const SensorRow& r : rows) {
+    char ins[64] = "-", per[64] = "-";
+    if (r.instructions >= 0) {
+      std::snprintf(ins, sizeof(ins), "%.2f M", r.instructions / 1e6);
+      std::snprintf(per, sizeof(per), "%.0f", r.instructions / std::max(r.points_per_scan, 1.0));
+    }
+    std::snprintf(buf, sizeof(buf), "| %s | %d | %s | %s | %zu | %.0f | %.2f%% | %.2f%% | %.2f%% | %.2f%% | %.2f | %s | %s |\n",
+                  r.sensor.c_str(), r.beams, r.world.c_str(), r.method.c_str(), r.acc.scans, r.points_per_scan,
+                  100.0 * r.acc.groundPrecision(), 100.0 * r.acc.groundRecall(), 100.0 * f1Of(r.acc),
+                  100.0 * r.acc.obstacleRecall(), r.ms, ins, per);
+    out += buf;
+  }
+  // The targets: F1 >= 97 % for 32 beams or more, >= 95 % below, on the urban and rural worlds.
+  std::string missed;
+  for (const SensorRow& r : rows) {
+    if (r.world != "urban" && r.world != "rural") continue;
+    const double target = r.beams >= 32 ? 97.0 : 95.0;
+    if (100.0 * f1Of(r.acc) < target) {
+      std::snprintf(buf, sizeof(buf), "%s%s on %s (%s): F1 %.2f%% < %.0f%%", missed.empty() ? "" : "; ",
+                    r.sensor.c_str(), r.world.c_str(), r.method.c_str(), 100.0 * f1Of(r.acc), target);
+      missed += buf;
+    }
+  }
+  out += missed.empty() ? "\nF1 targets (>= 97 % from 32 beams, >= 95 % below, urban and rural): all met.\n"
+                        : "\nF1 targets (>= 97 % from 32 beams, >= 95 % below, urban and rural) missed: " + missed + ".\n";
+  std::fputs(out.c_str(), stdout);
+  return status;
+}
+
 // Top-down picture of the middle scan of the evaluation (eval::writeOutcomePng): correct ground
 // dark green, correct obstacle dark red, missed obstacle magenta, false obstacle yellow,
 // unknown grey; 80 m wide.
@@ -361,6 +528,10 @@ int main(int argc, char** argv) {
   std::vector<std::string> mask_sources;          // --compare-masks NAME=MASK_DIR
   bool holes = false;                             // --holes: the per-hole table
   std::string phantom_dir;                        // --phantom-holes DIR (KITTI .bin scans)
+  std::vector<std::string> sensors;                // --sensor NAME[,NAME] | all: the per-sensor table
+  bool instructions = false;                      // --instructions: callgrind counts in that table
+  std::string callgrind_sensor;                   // --callgrind-scan SENSOR (used by --instructions)
+  std::vector<double> mount_rpy;                  // --mount-rpy R,P [deg] of the --sensor table
   std::string cmdline = "ground_eval";
   for (int i = 1; i < argc; ++i) cmdline += std::string(" ") + argv[i];
   for (int i = 1; i < argc; ++i) {
@@ -395,6 +566,19 @@ int main(int argc, char** argv) {
       }
     }
     else if (a == "--misses") misses = true;
+    else if (a == "--sensor") {
+      sensors = split(next());
+      if (sensors.size() == 1 && sensors[0] == "all") {
+        sensors.clear();
+        for (const LidarModel& m : lidarModels()) sensors.push_back(m.name);
+      }
+    }
+    else if (a == "--instructions") instructions = true;
+    else if (a == "--mount-rpy") {
+      for (const std::string& v : split(next())) mount_rpy.push_back(std::atof(v.c_str()));
+      if (mount_rpy.size() != 2) { std::cerr << "ground_eval: --mount-rpy needs R,P in degrees\n"; return 2; }
+    }
+    else if (a == "--callgrind-scan") callgrind_sensor = next();
     else if (a == "--markdown") markdown_path = next();
     else {
       const bool help = a == "-h" || a == "--help";
@@ -403,6 +587,8 @@ int main(int argc, char** argv) {
       out << "usage: ground_eval [--worlds a,b] [--method m1,m2] "
              "[--noise datasheet|table4.1|none] [--scans N] [--seed S] [--classes] [--set key=value]... "
              "[--png-errors PREFIX] [--sick-scans N] [--at-ground-band M] [--height-bound] [--region-bound] [--region-seed-kept F] [--misses] [--markdown OUT]\n"
+             "       ground_eval --sensor NAME[,NAME]|all [--worlds a,b] [--method m1,m2] [--noise N] [--scans N] [--seed S] "
+             "[--set key=value]... [--mount-rpy R,P] [--instructions] [--markdown OUT]\n"
              "       ground_eval --semantickitti DIR [--frames a:b] [--sensor-height M] [--method m1,m2] [--set key=value]... "
              "[--compare-masks NAME=MASK_DIR]... [--png-errors PREFIX] [--markdown OUT]\n"
              "       ground_eval --holes [--worlds a,b] [--method m1,m2] [--noise N] [--scans N] [--seed S] [--markdown OUT]\n"
@@ -411,6 +597,10 @@ int main(int argc, char** argv) {
              "  --semantickitti DIR: real labelled scans (DIR/velodyne/NNNNNN.bin, DIR/labels/NNNNNN.label) scored\n"
              "    under protocols A and B, by class and by range; --compare-masks scores another program's\n"
              "    MASK_DIR/NNNNNN.mask (one byte per return, 1 = ground) in the same run\n"
+             "  --sensor: the per-sensor table (sensor x world x method: P/R/F1, obstacle recall, ms per scan;\n"
+             "    --instructions adds callgrind's instructions per scan and per return; --mount-rpy tilts the\n"
+             "    sensor on its mount [deg]), default worlds urban,rural,\n"
+             "    default method vertical_scan; sensors: " + lidarModelNames() + "\n"
              "  --holes: negative obstacles per hole (>= 25 cm across, >= 5 cm deep, within 30 m, in sight)\n"
              "  --phantom-holes KITTI_DIR: holes reported on real road (clusters below the local ground, no object)\n"
              "  worlds (default all):";
@@ -431,8 +621,20 @@ int main(int argc, char** argv) {
   if (scans < 1 || sick_scans < 0) { std::cerr << "ground_eval: --scans must be >= 1, --sick-scans >= 0\n"; return 2; }
   // The table goes to stdout and, with --markdown, into `markdown` for OUT.
   std::string markdown;
+  const bool default_worlds = worlds == sim::standardWorldNames();
+  const bool default_methods = methods == groundModelNames();
+  if (!callgrind_sensor.empty()) {
+    return callgrindScan(callgrind_sensor, worlds.front(), methods.front(), sets, noise, scans, seed, mount_rpy);
+  }
+  if (!sensors.empty()) {
+    if (default_worlds) worlds = {"urban", "rural"};
+    if (default_methods) methods = {"vertical_scan"};
+    const int status = evaluateSensorTable(sensors, worlds, methods, sets, noise_name, noise, scans, seed,
+                                           instructions, mount_rpy, cmdline, &markdown);
+    if (status == 0 && !markdown_path.empty() && !writeTextFile(markdown_path, markdown)) return 1;
+    return status;
+  }
   if (holes || !phantom_dir.empty()) {
-    const bool default_worlds = worlds == sim::standardWorldNames();
     const int status =
         holes ? evaluateHoleTable(default_worlds ? std::vector<std::string>{"potholes"} : worlds, methods, sets,
                                   noise, scans, seed, cmdline, &markdown)

@@ -1,6 +1,8 @@
 // ground_segment: offline ground extraction on a KITTI .bin or a .pcd file (interfaces.md).
 //
-//   ground_segment SCAN [--sensor-height M] [--method NAME] [--mask OUT] [--repeat N]
+//   ground_segment SCAN [--sensor-height M] [--sensor-model NAME | --laser-elevations-deg A,B,..]
+//                       [--mount-rpy R,P] [--sensor-origin X,Y,Z] [--estimate-mount]
+//                       [--method NAME] [--mask OUT] [--repeat N]
 //                       [--png OUT] [--color label|p] [--png-range M] [--png-size PX]
 //
 // A thin main over the core: read the file, describe it as a CloudLayout, one classify call.
@@ -17,8 +19,10 @@
 #include <pcl/PCLPointCloud2.h>
 #include <pcl/io/pcd_io.h>
 
+#include "ladar_perception/cloud/lidar_models.h"
 #include "ladar_perception/cloud/point_cloud_view.h"
 #include "ladar_perception/ground/ground_model.h"
+#include "ladar_perception/ground/plane_fit.h"
 #include "ladar_perception/io/image.h"
 #include "ladar_perception/io/kitti.h"
 
@@ -30,6 +34,15 @@ void usage() {
   std::cerr
       << "usage: ground_segment SCAN(.bin|.pcd) [options]\n"
          "  --sensor-height M   sensor height above the ground [m] (default 1.73, KITTI)\n"
+         "  --sensor-model NAME the lidar (default hdl64e): " + lidarModelNames() + "\n"
+         "  --laser-elevations-deg A,B,...  a sensor's own beam elevations (instead of --sensor-model)\n"
+         "  --laser-elevations-from-rings  measure the beam elevations from a cloud with rings\n"
+         "                      (median per ring), print them and use them\n"
+         "  --mount-rpy R,P     the sensor's roll and pitch on its mount [deg] (default 0,0)\n"
+         "  --sensor-origin X,Y,Z  the cloud is in a vehicle frame at the ground: the sensor sits at\n"
+         "                      X,Y,Z in it (Z its height; replaces --sensor-height)\n"
+         "  --estimate-mount    height, roll and pitch from the scan's ground plane (Algorithm 1,\n"
+         "                      seeded with --sensor-height), printed and used\n"
          "  --method NAME       ground model (default: the first of --list-methods)\n"
          "  --list-methods      print the ground model names and exit\n"
          "  --mask OUT          one byte per input point: 1 = ground, 0 = not ground\n"
@@ -87,8 +100,24 @@ void rampColour(float p, uint8_t* rgb) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::string input, method, mask_path, png_path, color = "label";
+  std::string input, method, mask_path, png_path, color = "label", sensor_model = "hdl64e";
   float sensor_height = 1.73f, png_range = 40.f;
+  std::vector<float> elevations, mount_rpy, sensor_origin;
+  bool estimate_mount = false, elevations_from_rings = false;
+  auto numbers = [](const std::string& list) {
+    std::vector<float> out;
+    std::size_t start = 0;
+    while (start <= list.size()) {
+      const std::size_t comma = std::min(list.find(',', start), list.size());
+      const std::string item = list.substr(start, comma - start);
+      char* end = nullptr;
+      const float v = std::strtof(item.c_str(), &end);
+      if (item.empty() || *end != 0 || !std::isfinite(v)) return std::vector<float>();
+      out.push_back(v);
+      start = comma + 1;
+    }
+    return out;
+  };
   int repeat = 0, png_size = 1000;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
@@ -101,6 +130,21 @@ int main(int argc, char** argv) {
     };
     if (a == "--sensor-height") sensor_height = std::strtof(next("metres").c_str(), nullptr);
     else if (a == "--method") method = next("a name");
+    else if (a == "--sensor-model") sensor_model = next("a name");
+    else if (a == "--laser-elevations-deg") {
+      elevations = numbers(next("a list of degrees"));
+      if (elevations.empty()) { std::cerr << "ground_segment: --laser-elevations-deg needs numbers A,B,...\n"; return 2; }
+    } else if (a == "--mount-rpy") {
+      mount_rpy = numbers(next("roll,pitch"));
+      if (mount_rpy.size() != 2) { std::cerr << "ground_segment: --mount-rpy needs R,P in degrees\n"; return 2; }
+    } else if (a == "--sensor-origin") {
+      sensor_origin = numbers(next("x,y,z"));
+      if (sensor_origin.size() != 3 || !(sensor_origin[2] > 0.f)) {
+        std::cerr << "ground_segment: --sensor-origin needs X,Y,Z in metres, Z > 0\n";
+        return 2;
+      }
+    } else if (a == "--estimate-mount") estimate_mount = true;
+    else if (a == "--laser-elevations-from-rings") elevations_from_rings = true;
     else if (a == "--mask") mask_path = next("a path");
     else if (a == "--repeat") repeat = std::atoi(next("a count").c_str());
     else if (a == "--png") png_path = next("a path");
@@ -153,12 +197,65 @@ int main(int argc, char** argv) {
     std::cerr << "ground_segment: " << input << ": " << error << "\n";
     return 1;
   }
+  if (!sensor_origin.empty()) {
+    // A vehicle-frame cloud: moved into a frame at the sensor (axes kept), which the core
+    // expects; empty slots (0, 0, 0) stay empty.
+    const FieldDesc* fx = findField(cloud.layout, "x");
+    const FieldDesc* fy = findField(cloud.layout, "y");
+    const FieldDesc* fz = findField(cloud.layout, "z");
+    for (std::size_t i = 0; i < view.size(); ++i) {
+      const Eigen::Vector3f p = view.xyz(i);
+      if (p.isZero()) continue;
+      uint8_t* point = const_cast<uint8_t*>(view.pointData(i));
+      writeField(point, *fx, p.x() - sensor_origin[0]);
+      writeField(point, *fy, p.y() - sensor_origin[1]);
+      writeField(point, *fz, p.z() - sensor_origin[2]);
+    }
+    sensor_height = sensor_origin[2];
+  }
   std::unique_ptr<GroundModel> model = makeGroundModel(method, &error);
   if (!model) {
     std::cerr << "ground_segment: " << error << "\n";
     return 2;
   }
-  const SensorPose pose = SensorPose::fromHeight(sensor_height);
+  LidarModel lidar;
+  if (elevations_from_rings) {
+    if (!measureRingElevations(view, &elevations, &error)) {
+      std::cerr << "ground_segment: cannot measure the beam elevations: " << error << "\n";
+      return 1;
+    }
+    std::printf("laser_elevations_deg: [");
+    for (std::size_t k = 0; k < elevations.size(); ++k) std::printf("%s%.3f", k ? ", " : "", elevations[k]);
+    std::printf("]\n");
+  }
+  if (!elevations.empty()) {
+    if (!lidarModelFromElevations(elevations, &lidar, &error)) {
+      std::cerr << "ground_segment: " << error << "\n";
+      return 2;
+    }
+  } else if (const LidarModel* named = findLidarModel(sensor_model)) {
+    lidar = *named;
+  } else {
+    std::cerr << "ground_segment: unknown sensor model " << sensor_model << " (known: " << lidarModelNames() << ")\n";
+    return 2;
+  }
+  model->setLidarModel(lidar);
+  const std::string mismatch = checkCloudAgainstLidarModel(view, lidar);
+  if (!mismatch.empty()) std::fprintf(stderr, "ground_segment: warning: %s\n", mismatch.c_str());
+  SensorPose pose = SensorPose::fromHeight(sensor_height);
+  if (estimate_mount) {
+    MountEstimate mount;
+    if (!estimateMountFromGround(view, sensor_height, &mount)) {
+      std::cerr << "ground_segment: no ground plane found to estimate the mount from\n";
+      return 1;
+    }
+    std::printf("mount: height %.3f m, roll %.2f deg, pitch %.2f deg (%zu returns, %.1f%% within 0.2 m of the plane)\n",
+                mount.height, mount.roll_deg, mount.pitch_deg, mount.returns, 100.0 * mount.inlier_fraction);
+    pose = SensorPose::fromMount(mount.height, mount.roll_deg, mount.pitch_deg);
+  } else if (!mount_rpy.empty()) {
+    pose = SensorPose::fromMount(sensor_height, mount_rpy[0], mount_rpy[1]);
+  }
+
   GroundClassification result;
   model->classify(view, pose, &result);  // also warms the workspace
   if (repeat > 0) {

@@ -36,6 +36,9 @@ Vehicle (default: the world's standard drive):
   --loop                   restart the drive when it ends (with --duration longer than it)
 Sensors:
   --sensors YAML           sensor rig (default: the thesis vehicle = config/sensors.yaml)
+  --sensor NAME            every Velodyne of the rig becomes this lidar (hdl64e hdl32e vlp16 vlp32c
+                           os1_32 os1_64 os1_128 os2_128; Ouster models publish organised clouds)
+  --sensor-height M        ... mounted M above base_link (default: the model's usual height)
   --noise PROFILE          table4.1 (default) | datasheet | none, for every sensor
   --velodyne-sigma M       range noise of the Velodyne(s), metres (after --noise)
   --velodyne-max-range M   Velodyne max range (Table 4.1: 60 m; the unit reaches 120 m)
@@ -79,7 +82,7 @@ bool parseArgs(int argc, char** argv, Args* args, std::string* error) {
   }
   static const char* kKnown[] = {"--world", "--world-image", "--class-image", "--metres-per-pixel",
                                  "--height-scale", "--seed", "--trajectory", "--random-poses",
-                                 "--pose-radius", "--pose-yaw", "--pose-hold", "--loop", "--sensors",
+                                 "--pose-radius", "--pose-yaw", "--pose-hold", "--loop", "--sensors", "--sensor", "--sensor-height",
                                  "--noise", "--velodyne-sigma", "--velodyne-max-range", "--motion-distortion", "--out", "--duration",
                                  "--extrinsics", "--no-truth", "--tf-rate", "--start-time",
                                  "--compression", "--png", "--png-only", "--help", "-h"};
@@ -185,6 +188,19 @@ int main(int argc, char** argv) {
   // --- Sensors.
   sim::SensorRig rig = sim::SensorRig::thesisVehicle();
   if (args.has("--sensors") && !sim::loadSensorRig(args.get("--sensors"), &rig, &error)) return fail(error);
+  if (args.has("--sensor") || args.has("--sensor-height")) {
+    const LidarModel* lidar = findLidarModel(args.get("--sensor", "hdl64e"));
+    if (!lidar) return fail("unknown --sensor '" + args.get("--sensor") + "' (" + lidarModelNames() + ")");
+    double height = lidar->name == "hdl64e" ? 1.9 : lidar->mount_height;
+    if (!number("--sensor-height", height, &height)) return fail(error);
+    if (!(height > 0.0)) return fail("--sensor-height must be positive");
+    for (sim::SensorMount& s : rig.sensors) {
+      if (s.kind != sim::SensorKind::kVelodyne) continue;
+      s.lidar_model = lidar->name;
+      s.velodyne = sim::VelodyneModel::fromLidarModel(*lidar, sim::NoiseProfile::kTable41);
+      s.base_to_sensor.translation().z() = height;
+    }
+  }
   if (args.has("--noise")) {
     sim::NoiseProfile profile;
     if (!sim::noiseProfileFromName(args.get("--noise"), &profile)) {

@@ -122,8 +122,15 @@ class PointCloudView {
     return Eigen::Vector3f(x_.read<float>(p), y_.read<float>(p), z_.read<float>(p));
   }
 
-  bool hasRing() const { return ring_.valid; }
-  int ring(std::size_t i) const { return ring_.read<int>(pointData(i)); }
+  // The beam (row) of a return: the `ring` field (Velodyne's driver), else the `channel` field
+  // (Ouster's), else, for an organised cloud of 2..128 rows without either, its row (Ouster's
+  // driver publishes one row per beam). Integer fields only.
+  enum class RingSource { kNone, kRingField, kChannelField, kRows };
+  bool hasRing() const { return ring_source_ != RingSource::kNone; }
+  RingSource ringSource() const { return ring_source_; }
+  int ring(std::size_t i) const {
+    return ring_.valid ? ring_.read<int>(pointData(i)) : static_cast<int>(i / width_);
+  }
   bool hasIntensity() const { return intensity_.valid; }
   float intensity(std::size_t i) const { return intensity_.read<float>(pointData(i)); }
 
@@ -140,9 +147,11 @@ class PointCloudView {
   uint32_t point_step_ = 0;
   uint32_t row_step_ = 0;
   FieldAccessor x_, y_, z_, ring_, intensity_;
+  RingSource ring_source_ = RingSource::kNone;
   bool fast_xyz_ = false;
   bool contiguous_ = false;  // row_step == width * point_step (or one row)
 };
+const char* ringSourceName(PointCloudView::RingSource source);
 
 // An owned packed cloud: the ROS-free twin of sensor_msgs/PointCloud2 used by the simulator,
 // the file readers and the tests. view() borrows it.
@@ -165,6 +174,11 @@ CloudLayout velodyneXYZIRTLayout(uint32_t num_points);
 CloudLayout pclXYZILayout(uint32_t num_points);
 // KITTI's x,y,z,intensity float32 (16 bytes).
 CloudLayout xyziLayout(uint32_t num_points);
+// The ROS 1 Ouster driver's organised PointXYZIRT-like layout, `rows` x `columns` (one row per
+// beam, the top beam first; empty slots x = y = z = 0): x,y,z at 0,4,8 (16-byte aligned),
+// intensity float32 at 16, t uint32 at 20, reflectivity uint16 at 24, ring uint16 at 26 (the
+// row), ambient uint16 at 28, range uint32 at 32; point_step 48.
+CloudLayout ousterLayout(uint32_t rows, uint32_t columns);
 
 // Appends a field, returning its offset; the point_step grows to hold it (packed, no padding).
 uint32_t appendField(CloudLayout* layout, const std::string& name, FieldType type);

@@ -66,6 +66,7 @@ struct GroundAccuracy {
         continue;
       }
       const auto c = static_cast<sim::SurfaceClass>(truth[i]);
+      if (c == sim::SurfaceClass::kNone) continue;  // an empty slot of an organised cloud
       const uint8_t label = result.labels[i];
       const bool g = sim::isGroundClass(c), o = sim::isObstacleClass(c);
       ++points;
@@ -87,6 +88,29 @@ inline Eigen::Isometry3d evaluationSensorMount() {
   Eigen::Isometry3d m = Eigen::Isometry3d::Identity();
   m.translation() = Eigen::Vector3d(0.0, 0.0, 1.73);
   return m;
+}
+
+// The evaluation's sensor: a model of the lidar table (cloud/lidar_models.h) at its usual
+// mounting height above base_link, level; "hdl64e" is the mount above with
+// sim::VelodyneModel::hdl64e (Table 4.1 range limits).
+struct EvaluationSensor {
+  LidarModel lidar;
+  sim::VelodyneModel model;
+  Eigen::Isometry3d mount = Eigen::Isometry3d::Identity();
+};
+
+inline bool makeEvaluationSensor(const std::string& name, sim::NoiseProfile noise,
+                                 EvaluationSensor* sensor, std::string* error) {
+  const LidarModel* lidar = findLidarModel(name);
+  if (!lidar) {
+    if (error) *error = "unknown sensor " + name + " (known: " + lidarModelNames() + ")";
+    return false;
+  }
+  sensor->lidar = *lidar;
+  sensor->model = sim::VelodyneModel::fromLidarModel(*lidar, noise);
+  sensor->mount = Eigen::Isometry3d::Identity();
+  sensor->mount.translation() = Eigen::Vector3d(0.0, 0.0, name == "hdl64e" ? 1.73 : lidar->mount_height);
+  return true;
 }
 
 constexpr double kAtGroundRadius = 0.3;  // [m]
@@ -149,13 +173,14 @@ struct MissBreakdown {
 // (evenly spaced in time, noise seeds seed * 1000 + k). Calls
 // fn(world, sensor_in_world, view, truth) for each; false (and *error) when the world is
 // unknown or a scan cannot be read.
+// The same scans of another sensor (makeEvaluationSensor()).
 template <typename ScanFn>
-bool forEachEvaluationScan(const std::string& world_name, sim::NoiseProfile noise, int scans,
-                           uint32_t seed, std::string* error, ScanFn fn) {
+bool forEachEvaluationScan(const EvaluationSensor& evaluation_sensor, const std::string& world_name,
+                           int scans, uint32_t seed, std::string* error, ScanFn fn) {
   sim::World world;
   if (!sim::makeStandardWorld(world_name, seed, &world, error)) return false;
-  const sim::VelodyneModel velodyne = sim::VelodyneModel::hdl64e(noise);
-  const Eigen::Isometry3d mount = evaluationSensorMount();
+  const sim::VelodyneModel& velodyne = evaluation_sensor.model;
+  const Eigen::Isometry3d mount = evaluation_sensor.mount;
   sim::SimulatedScan scan;
   PointCloudView view;
   const double duration = world.driveDuration();
@@ -170,20 +195,30 @@ bool forEachEvaluationScan(const std::string& world_name, sim::NoiseProfile nois
   return true;
 }
 
+template <typename ScanFn>
+bool forEachEvaluationScan(const std::string& world_name, sim::NoiseProfile noise, int scans,
+                           uint32_t seed, std::string* error, ScanFn fn) {
+  EvaluationSensor sensor;
+  if (!makeEvaluationSensor("hdl64e", noise, &sensor, error)) return false;
+  return forEachEvaluationScan(sensor, world_name, scans, seed, error, fn);
+}
+
 // Classifies the evaluation's scans (forEachEvaluationScan) and accumulates the accuracy. The
 // model sees the sensor pose relative to base_link (what tf gives the nodelet: base_link
 // follows the local ground). at_ground_band > 0: the obstacle returns at the ground are not
 // scored (markObstacleReturnsAtTheGround). misses: where the missed obstacle returns are.
-inline bool evaluateGroundModel(const std::string& world_name, GroundModel* model,
-                                sim::NoiseProfile noise, int scans, uint32_t seed,
-                                GroundAccuracy* acc, std::string* error,
-                                double at_ground_band = 0.0, MissBreakdown* misses = nullptr) {
+// The sensor's scans; the model is told the sensor (GroundModel::setLidarModel) first.
+inline bool evaluateGroundModel(const EvaluationSensor& sensor_model, const std::string& world_name,
+                                GroundModel* model, int scans, uint32_t seed, GroundAccuracy* acc,
+                                std::string* error, double at_ground_band = 0.0,
+                                MissBreakdown* misses = nullptr) {
   SensorPose pose;
-  pose.sensor_to_ground = evaluationSensorMount().cast<float>();
+  pose.sensor_to_ground = sensor_model.mount.cast<float>();
+  model->setLidarModel(sensor_model.lidar);
   GroundClassification result;
   std::vector<uint8_t> at_ground;
   return forEachEvaluationScan(
-      world_name, noise, scans, seed, error,
+      sensor_model, world_name, scans, seed, error,
       [&](const sim::World& world, const Eigen::Isometry3d& sensor, const PointCloudView& view,
           const std::vector<uint8_t>& truth) {
         model->classify(view, pose, &result);
@@ -203,6 +238,16 @@ inline bool evaluateGroundModel(const std::string& world_name, GroundModel* mode
           misses->add(world, sensor * q.cast<double>(), sensor_xy, result.labels[i] != kLabelObstacle);
         }
       });
+}
+
+// The HDL-64E's scans (the evaluation of the tests and of the thesis's findings).
+inline bool evaluateGroundModel(const std::string& world_name, GroundModel* model,
+                                sim::NoiseProfile noise, int scans, uint32_t seed,
+                                GroundAccuracy* acc, std::string* error,
+                                double at_ground_band = 0.0, MissBreakdown* misses = nullptr) {
+  EvaluationSensor sensor;
+  if (!makeEvaluationSensor("hdl64e", noise, &sensor, error)) return false;
+  return evaluateGroundModel(sensor, world_name, model, scans, seed, acc, error, at_ground_band, misses);
 }
 
 // How far height alone can separate the obstacle returns from the ground on the evaluation's

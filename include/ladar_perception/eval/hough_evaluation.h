@@ -42,6 +42,7 @@ class TimedGroundModel : public GroundModel {
     const auto t1 = std::chrono::steady_clock::now();
     ms_.push_back(std::chrono::duration<double, std::milli>(t1 - t0).count());
   }
+  void setLidarModel(const LidarModel& lidar) override { inner_->setLidarModel(lidar); }
   const std::vector<double>& milliseconds() const { return ms_; }
   void reset() { ms_.clear(); }
 

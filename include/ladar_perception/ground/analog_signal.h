@@ -52,6 +52,11 @@ class AnalogSignalGround : public GroundModel {
   void classify(const PointCloudView& view, const SensorPose& pose,
                 GroundClassification* out) override;
   const AnalogSignalFit& fit() const { return fit_; }
+  // Rows from this sensor's elevations (clouds without a ring field).
+  void setLidarModel(const LidarModel& lidar) override {
+    params_.laser_elevations_deg = lidar.elevations_deg;
+    row_table_.build(lidar.elevations_deg);
+  }
 
  private:
   AnalogSignalParams params_;

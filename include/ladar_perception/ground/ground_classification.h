@@ -75,6 +75,17 @@ struct SensorPose {
     p.sensor_to_ground.translation() = Eigen::Vector3f(0.f, 0.f, sensor_height);
     return p;
   }
+  // A tilted mount: the sensor sensor_height above the ground, rolled about its x axis and
+  // pitched about its y axis (degrees; positive pitch turns the sensor's x axis downward,
+  // R = Ry(pitch) Rx(roll), as a tf of rpy (roll, pitch, 0)).
+  static SensorPose fromMount(float sensor_height, float roll_deg, float pitch_deg) {
+    SensorPose p = fromHeight(sensor_height);
+    const float deg = 3.14159265358979f / 180.f;
+    p.sensor_to_ground.linear() =
+        (Eigen::AngleAxisf(pitch_deg * deg, Eigen::Vector3f::UnitY()) *
+         Eigen::AngleAxisf(roll_deg * deg, Eigen::Vector3f::UnitX())).toRotationMatrix();
+    return p;
+  }
   float height() const { return sensor_to_ground.translation().z(); }
 };
 

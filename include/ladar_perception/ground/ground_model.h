@@ -9,6 +9,7 @@
 
 #include <Eigen/Core>
 
+#include "ladar_perception/cloud/lidar_models.h"
 #include "ladar_perception/cloud/point_cloud_view.h"
 #include "ladar_perception/ground/ground_classification.h"
 
@@ -34,6 +35,10 @@ class GroundModel {
   // Never throws on bad data: NaN/Inf or out-of-range returns are labelled unknown.
   virtual void classify(const PointCloudView& view, const SensorPose& pose,
                         GroundClassification* out) = 0;
+  // The sensor the clouds come from (lidar_models.h): models that read the beam geometry
+  // (rows from elevations, the spacing of adjacent beams) take it from here; the others
+  // ignore it. The HDL-64E until set.
+  virtual void setLidarModel(const LidarModel& lidar) { (void)lidar; }
 };
 
 // Names accepted by makeGroundModel, the default first.

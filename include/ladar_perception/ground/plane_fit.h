@@ -55,4 +55,16 @@ class PlaneFitGround : public GroundModel {
   std::vector<uint32_t> index_;
 };
 
+// The mount of a sensor whose height and tilt are not known, from one scan (sensor frame): the
+// ground plane of Algorithm 1 fitted to the returns within [min_range, 40 m] (seeded with level
+// ground seed_height below the sensor), as the sensor's height above it and the roll and pitch
+// that level it (SensorPose::fromMount conventions). False when fewer than 100 returns take
+// part or the fit is degenerate.
+struct MountEstimate {
+  float height = 0.f, roll_deg = 0.f, pitch_deg = 0.f;
+  std::size_t returns = 0;   // returns in the fit
+  double inlier_fraction = 0.0;  // of them within the fit's sigma of the plane
+};
+bool estimateMountFromGround(const PointCloudView& view, float seed_height, MountEstimate* mount);
+
 }  // namespace ladar_perception

@@ -156,6 +156,18 @@ VerticalScanParams verticalScanThesisParams();
 VerticalScanParams verticalScanDefaultParams();
 VerticalScanParams verticalScanBinsParams();
 
+// The params for a sensor of the lidar table (or a user's laser_elevations_deg): its beam
+// elevations, for the row table and the spacing of adjacent rows, and the tracking step
+// scaled for sparser beams: track_max_step (set for the HDL-64E) times sparseBeamScale().
+// Consecutive ground returns of a column lie Delta_r ~ r^2 Delta_theta / h apart, so a sensor
+// with wider beam spacing Delta_theta extrapolates the ground line over longer gaps, where the
+// terrain bends more; the linear growth with the gap (track_tolerance_per_m) is unchanged.
+VerticalScanParams paramsForLidarModel(VerticalScanParams params, const LidarModel& lidar);
+// sqrt(Delta_theta / Delta_theta_HDL-64E) for the mean spacing of the downward beams, within
+// [1, 2.5]: 1 for the HDL-64E and the 128-beam sensors, about 1.8 for the 32-beam ones, 2.2
+// for the VLP-16.
+float sparseBeamScale(const std::vector<float>& elevations_deg);
+
 // Sets one parameter of the table by its name or field path ("weight_bias",
 // "gnd_error_max_base" or "tolerances.gnd_error_max_base", "bend_ground_line" 0/1, ...): the
 // tools' --set key=value. False with a reason for an unknown key or a value out of its range.
@@ -296,6 +308,8 @@ class VerticalScanGround : public GroundModel {
 
   const VerticalScanParams& params() const { return params_; }
   void setParams(const VerticalScanParams& params);
+  // setParams(paramsForLidarModel(params(), lidar)).
+  void setLidarModel(const LidarModel& lidar) override;
 
   // Introspection of the last scan (tests, visualisation).
   int columns() const { return columns_; }
@@ -304,6 +318,17 @@ class VerticalScanGround : public GroundModel {
   // (beyond the scan's farthest return: its last segment extended).
   float groundHeight(int col, float r) const;
   int columnOf(float x, float y) const;
+  // How the last scan's rows were read: from the ring or channel field or the rows of an
+  // organised cloud (source), the highest ring seen (every 7th return), and whether the ring
+  // numbers count from the top beam down (Ouster's driver; checked per scan from the returns'
+  // elevations, then row = top_ring - ring). Source kNone: rows from the elevation table.
+  struct RingInfo {
+    PointCloudView::RingSource source = PointCloudView::RingSource::kNone;
+    int max_ring = -1;
+    int top_ring = -1;
+    bool top_down = false;
+  };
+  const RingInfo& lastRings() const { return last_rings_; }
 
  private:
   // Column (0..columns_-1) of a ground-frame direction, through the atan LUT.
@@ -312,6 +337,7 @@ class VerticalScanGround : public GroundModel {
   inline float groundLineHeight(int col, float r) const;
   template <bool kRing, bool kTilted, bool kFastXYZ, bool kSubColumns>
   void binPoints(const PointCloudView& view, const SensorPose& pose, GroundClassification* out);
+  void readRingOrder(const PointCloudView& view);
   void fitColumns();
   void labelPoints(GroundClassification* out);
   void labelFromLaserNeighbours(float sensor_height, GroundClassification* out);
@@ -321,6 +347,7 @@ class VerticalScanGround : public GroundModel {
   VerticalScanParams params_;
   std::string name_;
   ElevationRowTable row_table_;
+  RingInfo last_rings_;
   int columns_ = 0;
   int rows_ = 0;       // rows per column in the bin grid (a power of two)
   int row_shift_ = 0;  // log2(rows_)

@@ -62,6 +62,11 @@ class VerticalScanGroundRos {
   std::string ground_frame_;
   bool use_tf_ = true;
   float sensor_height_ = 1.73f;
+  // The sensor (~sensor_model or ~laser_elevations_deg) and, with ~use_tf false, its mount's
+  // roll and pitch (~mount_roll_deg, ~mount_pitch_deg).
+  LidarModel lidar_;
+  float mount_roll_deg_ = 0.f, mount_pitch_deg_ = 0.f;
+  std::atomic<const char*> rows_from_{"elevation table"};  // where the last scan's rows came from
 
   InputHealth health_;
   std::unique_ptr<AdapterDiagnostics> diagnostics_;

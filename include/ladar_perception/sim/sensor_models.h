@@ -5,6 +5,8 @@
 #include <string>
 #include <vector>
 
+#include "ladar_perception/cloud/lidar_models.h"
+
 namespace ladar_perception {
 namespace sim {
 
@@ -35,8 +37,18 @@ struct VelodyneModel {
   // clockwise seen from above (azimuth decreasing), as the real unit does. Starting behind
   // the vehicle puts the revolution's seam there.
   double start_azimuth = 3.141592653589793;
+  // Organised output as Ouster's driver publishes it (ousterLayout: one row per laser, the
+  // top laser first, every firing a slot, empty slots zero) instead of the returns only.
+  bool organised = false;
 
   static VelodyneModel hdl64e(NoiseProfile profile = NoiseProfile::kTable41);
+  // A model of the lidar table (cloud/lidar_models.h): its beams, firings, rate, range limits
+  // and organisation; noise: the datasheet's with kDatasheet and kTable41 (Table 4.1 has the
+  // HDL-64E only), none with kNone. "hdl64e" is hdl64e(profile) (Table 4.1 ranges).
+  static VelodyneModel fromLidarModel(const LidarModel& lidar, NoiseProfile profile);
+  // The same by name; false with the known names in *error for an unknown one.
+  static bool named(const std::string& name, NoiseProfile profile, VelodyneModel* model,
+                    std::string* error);
   int lasers() const { return static_cast<int>(elevations_deg.size()); }
   double period() const { return 1.0 / rate_hz; }
   std::size_t raysPerRevolution() const {

@@ -28,6 +28,7 @@ struct SensorMount {
   std::string truth_topic;  // per-point SurfaceClass, same order as the data
   Eigen::Isometry3d base_to_sensor = Eigen::Isometry3d::Identity();  // sensor pose in base_link
   VelodyneModel velodyne = VelodyneModel::hdl64e();
+  std::string lidar_model = "hdl64e";  // the Velodyne's name in the lidar table (its `type`)
   SickModel sick = SickModel::lms291();
   StereoModel stereo = StereoModel::bumblebee();
 

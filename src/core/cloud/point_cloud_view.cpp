@@ -140,8 +140,15 @@ bool PointCloudView::create(const uint8_t* data, std::size_t data_size, const Cl
   }
   makeAccessor(layout, "ring", false, &v.ring_, nullptr);
   if (v.ring_.valid && isFloatType(v.ring_)) v.ring_.valid = false;  // a ring is an integer
-  if (!v.ring_.valid) makeAccessor(layout, "channel", false, &v.ring_, nullptr);  // Ouster name
-  if (v.ring_.valid && isFloatType(v.ring_)) v.ring_.valid = false;
+  if (v.ring_.valid) v.ring_source_ = RingSource::kRingField;
+  if (!v.ring_.valid) {
+    makeAccessor(layout, "channel", false, &v.ring_, nullptr);  // Ouster name
+    if (v.ring_.valid && isFloatType(v.ring_)) v.ring_.valid = false;
+    if (v.ring_.valid) v.ring_source_ = RingSource::kChannelField;
+  }
+  if (!v.ring_.valid && layout.height >= 2 && layout.height <= 128 && layout.width > 0) {
+    v.ring_source_ = RingSource::kRows;
+  }
   makeAccessor(layout, "intensity", false, &v.intensity_, nullptr);
   v.data_ = data;
   v.layout_ = &layout;
@@ -156,6 +163,16 @@ bool PointCloudView::create(const uint8_t* data, std::size_t data_size, const Cl
                 v.z_.type == FieldType::kFloat32;
   *view = v;
   return true;
+}
+
+const char* ringSourceName(PointCloudView::RingSource source) {
+  switch (source) {
+    case PointCloudView::RingSource::kRingField: return "ring field";
+    case PointCloudView::RingSource::kChannelField: return "channel field";
+    case PointCloudView::RingSource::kRows: return "organised rows";
+    case PointCloudView::RingSource::kNone: break;
+  }
+  return "none";
 }
 
 FieldAccessor PointCloudView::field(const std::string& name) const {
@@ -232,6 +249,25 @@ CloudLayout xyziLayout(uint32_t num_points) {
   appendField(&l, "y", FieldType::kFloat32);
   appendField(&l, "z", FieldType::kFloat32);
   appendField(&l, "intensity", FieldType::kFloat32);
+  return l;
+}
+
+CloudLayout ousterLayout(uint32_t rows, uint32_t columns) {
+  CloudLayout l = emptyLayout(columns);
+  appendField(&l, "x", FieldType::kFloat32);
+  appendField(&l, "y", FieldType::kFloat32);
+  appendField(&l, "z", FieldType::kFloat32);
+  l.point_step = 16;
+  appendField(&l, "intensity", FieldType::kFloat32);
+  appendField(&l, "t", FieldType::kUInt32);
+  appendField(&l, "reflectivity", FieldType::kUInt16);
+  appendField(&l, "ring", FieldType::kUInt16);
+  appendField(&l, "ambient", FieldType::kUInt16);
+  l.point_step = 32;
+  appendField(&l, "range", FieldType::kUInt32);
+  l.point_step = 48;
+  l.height = rows;
+  l.row_step = l.point_step * l.width;
   return l;
 }
 

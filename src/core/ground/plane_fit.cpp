@@ -90,4 +90,33 @@ void PlaneFitGround::classify(const PointCloudView& view, const SensorPose& pose
   }
 }
 
+bool estimateMountFromGround(const PointCloudView& view, float seed_height, MountEstimate* mount) {
+  PlaneFitParams params;
+  params.max_iterations = 20;
+  std::vector<float> x, y, z;
+  const RangeGate gate(params.min_range, 40.f);
+  for (std::size_t i = 0; i < view.size(); ++i) {
+    const Eigen::Vector3f p = view.xyz(i);
+    if (!gate.admits(p)) continue;
+    x.push_back(p.x());
+    y.push_back(p.y());
+    z.push_back(p.z());
+  }
+  const int n = static_cast<int>(x.size());
+  if (n < 100) return false;
+  Eigen::Vector3d c(0.0, 0.0, -1.0 / std::max(0.3f, seed_height));
+  if (!fitPlaneGaussianReweighted(x.data(), y.data(), z.data(), n, params, &c) || !(c.z() < 0.0)) return false;
+  // The plane n . p = d with n = c / |c| pointing down to it, d = 1 / |c| the height; up = -n
+  // in the sensor frame is R^T e_z for R = Ry(pitch) Rx(roll): (-sin p, sin r cos p, cos r cos p).
+  const Eigen::Vector3d up = -c.normalized();
+  mount->height = static_cast<float>(1.0 / c.norm());
+  mount->pitch_deg = static_cast<float>(std::asin(std::max(-1.0, std::min(1.0, -up.x()))) * 180.0 / M_PI);
+  mount->roll_deg = static_cast<float>(std::atan2(up.y(), up.z()) * 180.0 / M_PI);
+  mount->returns = x.size();
+  std::size_t inliers = 0;
+  for (int i = 0; i < n; ++i) inliers += std::fabs(heightAbovePlane(c, x[i], y[i], z[i])) < params.sigma;
+  mount->inlier_fraction = static_cast<double>(inliers) / n;
+  return true;
+}
+
 }  // namespace ladar_perception

@@ -78,6 +78,10 @@ VerticalScanGround::VerticalScanGround(const VerticalScanParams& params, std::st
   setParams(params);
 }
 
+void VerticalScanGround::setLidarModel(const LidarModel& lidar) {
+  setParams(paramsForLidarModel(params_, lidar));
+}
+
 void VerticalScanGround::setParams(const VerticalScanParams& params) {
   params_ = params;
   VerticalScanParams& p = params_;
@@ -185,6 +189,35 @@ inline float VerticalScanGround::columnCoordinate(float x, float y) const {
   return a < max_c ? a : max_c;
 }
 
+void VerticalScanGround::readRingOrder(const PointCloudView& view) {
+  // Every 7th return (a stride prime to the usual beam counts): the highest ring, and the mean
+  // tan(elevation) = z / r (sensor frame) of
+  // the returns of the lower and the upper half of the ring numbers. Over a revolution a tilt
+  // averages out, so the half with the higher mean holds the upper beams.
+  RingInfo info;
+  info.source = view.ringSource();
+  const std::size_t n = view.size();
+  int max_ring = -1;
+  for (std::size_t i = 0; i < n; i += 7) max_ring = std::max(max_ring, view.ring(i));
+  if (info.source == PointCloudView::RingSource::kRows) max_ring = static_cast<int>(view.height()) - 1;
+  info.max_ring = max_ring;
+  info.top_ring = std::max(max_ring, row_table_.rows() - 1);
+  const int mid = info.top_ring / 2;
+  double sum[2] = {0.0, 0.0};
+  std::size_t count[2] = {0, 0};
+  for (std::size_t i = 0; i < n; i += 7) {
+    const Eigen::Vector3f p = view.xyz(i);
+    const float r = std::sqrt(p.x() * p.x() + p.y() * p.y());
+    if (!(r > 0.5f) || !std::isfinite(p.z())) continue;
+    const int half = view.ring(i) > mid;
+    sum[half] += p.z() / r;
+    ++count[half];
+  }
+  info.top_down = count[0] >= 16 && count[1] >= 16 &&
+                  sum[0] / static_cast<double>(count[0]) > sum[1] / static_cast<double>(count[1]);
+  last_rings_ = info;
+}
+
 float VerticalScanGround::groundHeight(int col, float r) const { return groundLineHeight(col, r); }
 
 int VerticalScanGround::columnOf(float x, float y) const {
@@ -200,6 +233,8 @@ LADAR_HOT_PATH void VerticalScanGround::binPoints(const PointCloudView& view, co
   const Eigen::Matrix3f R = pose.sensor_to_ground.linear();
   const Eigen::Vector3f t = pose.sensor_to_ground.translation();
   const int rows = rows_;
+  // Top-down rings (Ouster): row = ring_top - ring, so that row 0 is the lowest beam.
+  const int ring_top = kRing && last_rings_.top_down ? last_rings_.top_ring : -1;
   const ElevationRowTable& row_table = row_table_;
   const float* __restrict atan_lut = atan_lut_.data();
   const float max_c = static_cast<float>(columns_) - 0.5f;
@@ -317,7 +352,8 @@ LADAR_HOT_PATH void VerticalScanGround::binPoints(const PointCloudView& view, co
       if (kRing) {
         int ring[4];
         for (int l = 0; l < 4; ++l) {
-          const int rg = view.ring(i + l);
+          int rg = view.ring(i + l);
+          if (ring_top >= 0) rg = ring_top - rg;
           ring[l] = rg < 0 ? 0 : (rg >= rows ? rows - 1 : rg);
         }
         row = _mm_setr_epi32(ring[0], ring[1], ring[2], ring[3]);
@@ -400,6 +436,7 @@ LADAR_HOT_PATH void VerticalScanGround::binPoints(const PointCloudView& view, co
     int row;
     if (kRing) {
       row = view.ring(i);
+      if (ring_top >= 0) row = ring_top - row;
       row = row < 0 ? 0 : (row >= rows ? rows - 1 : row);
     } else {
       row = row_table.row(zs, rs > kMinR ? rs : kMinR);
@@ -433,6 +470,8 @@ void VerticalScanGround::classify(const PointCloudView& view, const SensorPose& 
   const std::size_t n = view.size();
   out->resize(n);
   const bool ring = view.hasRing();
+  if (ring) readRingOrder(view);
+  else last_rings_ = RingInfo();
   const int wanted_rows = ring ? kMaxRingRows : std::max(1, row_table_.rows());
   row_shift_ = 0;
   while ((1 << row_shift_) < wanted_rows) ++row_shift_;

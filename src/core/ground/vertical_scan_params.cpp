@@ -2,9 +2,12 @@
 // parameter table's --set, get and listing (vertical_scan_params.def).
 #include "ladar_perception/ground/vertical_scan.h"
 
+#include <algorithm>
+#include <cmath>
 #include <string>
 #include <vector>
 
+#include "ladar_perception/cloud/laser_elevations.h"
 #include "param_access.h"
 
 namespace ladar_perception {
@@ -107,6 +110,38 @@ VerticalScanParams verticalScanDefaultParams() {
   // ground precision 99.21 -> 98.09 %, 4 scans), and finds one hole fewer of 105 (see README).
   p.local_ground = false;
   return p;
+}
+
+// The mean spacing of the beams that look down [deg] (those that see the ground; a sensor's
+// upward beams do not matter to the ground line). The whole table's when fewer than two do.
+namespace {
+float downwardBeamSpacingDeg(const std::vector<float>& elevations_deg) {
+  std::vector<float> down;
+  for (float e : elevations_deg) {
+    if (e < 0.f) down.push_back(e);
+  }
+  const std::vector<float>& el = down.size() >= 2 ? down : elevations_deg;
+  if (el.size() < 2) return 0.f;
+  const auto [lo, hi] = std::minmax_element(el.begin(), el.end());
+  return (*hi - *lo) / static_cast<float>(el.size() - 1);
+}
+}  // namespace
+
+VerticalScanParams paramsForLidarModel(VerticalScanParams params, const LidarModel& lidar) {
+  // Scales apply to the settings of the HDL-64E: undo a previous sensor's first.
+  const float old_scale = sparseBeamScale(params.laser_elevations_deg.empty() ? hdl64eElevationsDeg()
+                                                                              : params.laser_elevations_deg);
+  const float scale = sparseBeamScale(lidar.elevations_deg);
+  params.laser_elevations_deg = lidar.elevations_deg;
+  params.track_max_step *= scale / old_scale;
+  return params;
+}
+
+float sparseBeamScale(const std::vector<float>& elevations_deg) {
+  const float ref = downwardBeamSpacingDeg(hdl64eElevationsDeg());
+  const float spacing = downwardBeamSpacingDeg(elevations_deg);
+  if (!(spacing > ref) || !(ref > 0.f)) return 1.f;
+  return std::min(2.5f, std::sqrt(spacing / ref));
 }
 
 VerticalScanParams verticalScanBinsParams() {

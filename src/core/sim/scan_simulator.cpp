@@ -59,6 +59,57 @@ inline bool noisyRange(double true_range, double sigma, double min_range, double
   return r >= min_range && r <= max_range;
 }
 
+// Pass 2 of an organised model (Ouster's driver): row 0 is the top laser, column k the k-th
+// firing; every slot is written, empty ones (no return in range) with x = y = z = 0 and truth
+// kNone. The same noise per ray as the returns-only output.
+void writeOrganised(const VelodyneModel& model, int lasers, int steps, const std::vector<double>& cos_el,
+                    const std::vector<double>& sin_el, const std::vector<double>& cos_az,
+                    const std::vector<double>& sin_az, const std::vector<double>& hit_range,
+                    const std::vector<float>& hit_cos, const std::vector<uint8_t>& hit_class,
+                    uint64_t seed, SimulatedScan* out) {
+  const CloudLayout ref = ousterLayout(static_cast<uint32_t>(lasers), static_cast<uint32_t>(steps));
+  if (out->cloud.layout.point_step != ref.point_step || out->cloud.layout.fields.size() != ref.fields.size()) {
+    out->cloud.layout = ref;
+  }
+  out->cloud.layout.width = ref.width;
+  out->cloud.layout.height = ref.height;
+  out->cloud.layout.row_step = ref.row_step;
+  const std::size_t slots = static_cast<std::size_t>(lasers) * steps;
+  const uint32_t step_bytes = ref.point_step;
+  out->cloud.data.assign(slots * step_bytes, 0);
+  out->truth.assign(slots, static_cast<uint8_t>(SurfaceClass::kNone));
+  const double dt = model.period() / steps;
+  GaussianStream noise(seed);
+  for (int row = 0; row < lasers; ++row) {
+    const int l = lasers - 1 - row;
+    for (int k = 0; k < steps; ++k) {
+      const std::size_t slot = static_cast<std::size_t>(row) * steps + k;
+      uint8_t* dst = out->cloud.data.data() + slot * step_bytes;
+      const uint16_t ring = static_cast<uint16_t>(row);
+      std::memcpy(dst + 26, &ring, 2);
+      const uint32_t t_ns = static_cast<uint32_t>(k * dt * 1e9);
+      std::memcpy(dst + 20, &t_ns, 4);
+      const std::size_t ray = static_cast<std::size_t>(k) * lasers + l;
+      double r;
+      if (hit_range[ray] < 0.0 ||
+          !noisyRange(hit_range[ray], model.noise_sigma, model.min_range, model.max_range, &noise, ray, &r)) {
+        continue;
+      }
+      const double dx = cos_el[l] * cos_az[k], dy = cos_el[l] * sin_az[k], dz = sin_el[l];
+      putFloat(dst + 0, static_cast<float>(dx * r));
+      putFloat(dst + 4, static_cast<float>(dy * r));
+      putFloat(dst + 8, static_cast<float>(dz * r));
+      const float intensity = returnIntensity(static_cast<SurfaceClass>(hit_class[ray]), hit_cos[ray]);
+      putFloat(dst + 16, intensity);
+      const uint16_t reflectivity = static_cast<uint16_t>(intensity);
+      std::memcpy(dst + 24, &reflectivity, 2);
+      const uint32_t range_mm = static_cast<uint32_t>(r * 1000.0);
+      std::memcpy(dst + 32, &range_mm, 4);
+      out->truth[slot] = hit_class[ray];
+    }
+  }
+}
+
 void simulateVelodyne(const World& world, const Eigen::Isometry3d& start,
                       const Eigen::Isometry3d* end, const VelodyneModel& model, uint64_t seed,
                       SimulatedScan* out) {
@@ -125,6 +176,11 @@ void simulateVelodyne(const World& world, const Eigen::Isometry3d& start,
       hit_cos[ray] = static_cast<float>(std::abs(hit.normal.cast<double>().dot(dw)));
       hit_class[ray] = static_cast<uint8_t>(hit.surface);
     }
+  }
+  if (model.organised) {
+    writeOrganised(model, lasers, steps, cos_el, sin_el, cos_az, sin_az, hit_range, hit_cos, hit_class,
+                   seed, out);
+    return;
   }
   // Pass 2 writes the returns in firing order (azimuth step, then ring) with their noise.
   const uint32_t step_bytes = 22;

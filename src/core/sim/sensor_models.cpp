@@ -36,9 +36,34 @@ VelodyneModel VelodyneModel::hdl64e(NoiseProfile profile) {
   return m;
 }
 
+VelodyneModel VelodyneModel::fromLidarModel(const LidarModel& lidar, NoiseProfile profile) {
+  if (lidar.name == "hdl64e") return hdl64e(profile);
+  VelodyneModel m;
+  m.elevations_deg = lidar.elevations_deg;
+  m.azimuth_steps = lidar.azimuth_steps;
+  m.rate_hz = lidar.rate_hz;
+  m.min_range = lidar.min_range;
+  m.max_range = lidar.max_range;
+  m.noise_sigma = profile == NoiseProfile::kNone ? 0.0 : lidar.noise_sigma;
+  m.organised = lidar.organised;
+  return m;
+}
+
+bool VelodyneModel::named(const std::string& name, NoiseProfile profile, VelodyneModel* model,
+                          std::string* error) {
+  const LidarModel* lidar = findLidarModel(name);
+  if (!lidar) {
+    if (error) *error = "unknown sensor " + name + " (known: " + lidarModelNames() + ")";
+    return false;
+  }
+  *model = fromLidarModel(*lidar, profile);
+  return true;
+}
+
 std::string VelodyneModel::validate() const {
   if (elevations_deg.empty()) return "velodyne model has no lasers";
   if (elevations_deg.size() > 65535) return "velodyne model has more lasers than a ring can number";
+  if (organised && elevations_deg.size() > 128) return "an organised model has at most 128 lasers";
   for (float e : elevations_deg) {
     if (!std::isfinite(e) || std::abs(e) >= 90.f) return "velodyne laser elevation outside (-90, 90) degrees";
   }

@@ -50,7 +50,9 @@ Eigen::Vector3d rpyOf(const Eigen::Matrix3d& R) {
 
 void SensorRig::setNoise(NoiseProfile profile) {
   for (SensorMount& s : sensors) {
-    s.velodyne.noise_sigma = VelodyneModel::hdl64e(profile).noise_sigma;
+    const LidarModel* lidar = findLidarModel(s.lidar_model);
+    s.velodyne.noise_sigma = lidar ? VelodyneModel::fromLidarModel(*lidar, profile).noise_sigma
+                                   : VelodyneModel::hdl64e(profile).noise_sigma;
     s.sick.noise_sigma = SickModel::lms291(profile).noise_sigma;
     s.stereo.noise_sigma = StereoModel::bumblebee(profile).noise_sigma;
   }
@@ -134,11 +136,15 @@ bool parseRoot(const YAML::Node& root, SensorRig* rig, std::string* error) {
       return false;
     }
     const std::string type = s["type"] ? s["type"].as<std::string>() : "";
-    if (type == "hdl64e" || type == "velodyne") m.kind = SensorKind::kVelodyne;
+    const LidarModel* lidar = findLidarModel(type == "velodyne" ? "hdl64e" : type);
+    if (lidar) {
+      m.kind = SensorKind::kVelodyne;
+      m.lidar_model = lidar->name;
+    }
     else if (type == "lms291" || type == "sick") m.kind = SensorKind::kSick;
     else if (type == "stereo") m.kind = SensorKind::kStereo;
     else {
-      *error = where + ": unknown type '" + type + "' (hdl64e, lms291, stereo)";
+      *error = where + ": unknown type '" + type + "' (" + lidarModelNames() + ", lms291, stereo)";
       return false;
     }
     m.frame_id = m.name;
@@ -165,7 +171,7 @@ bool parseRoot(const YAML::Node& root, SensorRig* rig, std::string* error) {
       *error = where + ": unknown noise_profile";
       return false;
     }
-    m.velodyne = VelodyneModel::hdl64e(profile);
+    m.velodyne = lidar ? VelodyneModel::fromLidarModel(*lidar, profile) : VelodyneModel::hdl64e(profile);
     m.sick = SickModel::lms291(profile);
     m.stereo = StereoModel::bumblebee(profile);
     std::string invalid;
@@ -256,7 +262,8 @@ std::string extrinsicsYaml(const SensorRig& rig, const std::string& world, uint6
     const Eigen::Quaterniond q(s.base_to_sensor.linear());
     y << YAML::BeginMap;
     y << YAML::Key << "name" << YAML::Value << s.name;
-    y << YAML::Key << "type" << YAML::Value << sensorKindName(s.kind);
+    y << YAML::Key << "type" << YAML::Value
+      << (s.kind == SensorKind::kVelodyne ? s.lidar_model : std::string(sensorKindName(s.kind)));
     y << YAML::Key << "frame_id" << YAML::Value << s.frame_id;
     y << YAML::Key << "parent_frame" << YAML::Value << rig.base_frame;
     y << YAML::Key << "topic" << YAML::Value << s.topic;
