@@ -19,6 +19,7 @@
 #include <string>
 #include <vector>
 
+#include "ladar_perception/cloud/lidar_models.h"
 #include "ladar_perception/cloud/point_cloud_view.h"
 #include "ladar_perception/eval/real_ground_eval.h"
 #include "ladar_perception/eval/semantic_kitti.h"
@@ -290,6 +291,13 @@ struct PyGroundModel {
     return py::make_tuple(labels, p_obstacle);
   }
 };
+
+// The lidar table's model of that name (lidar_models()); ValueError for another.
+const LidarModel& lidarFrom(const std::string& name) {
+  const LidarModel* m = findLidarModel(name);
+  if (!m) throw py::value_error("unknown lidar model '" + name + "' (known: " + lidarModelNames() + ")");
+  return *m;
+}
 
 struct PyVerticalScanGround : PyGroundModel {
   VerticalScanGround* vs() { return static_cast<VerticalScanGround*>(model.get()); }
@@ -569,16 +577,19 @@ PYBIND11_MODULE(_core, m) {
       "P(obstacle) (N,) float32, in input order. The core call runs without the GIL; one call at a\n"
       "time per model object (use one object per thread to run in parallel).";
   py::class_<PyGroundModel> model(m, "GroundModel", "A ground model of the core by name (ground_model_names()).");
-  model.def(py::init([](const std::string& method, float sensor_height) {
+  model.def(py::init([](const std::string& method, float sensor_height, const py::object& lidar) {
               auto g = std::make_unique<PyGroundModel>();
               std::string error;
               g->model = makeGroundModel(method, &error);
               if (!g->model) throw py::value_error(error);
+              if (!lidar.is_none()) g->model->setLidarModel(lidarFrom(lidar.cast<std::string>()));
               if (!std::isfinite(sensor_height) || sensor_height <= 0.f) throw py::value_error("sensor_height must be > 0 [m]");
               g->sensor_height = sensor_height;
               return g;
             }),
-            py::arg("method") = "vertical_scan", py::arg("sensor_height") = kKittiSensorHeight);
+            py::arg("method") = "vertical_scan", py::arg("sensor_height") = kKittiSensorHeight,
+            py::arg("lidar") = py::none(),
+            "lidar: a name of lidar_models() (the beam geometry; default the HDL-64E).");
   model.def_property_readonly("name", [](PyGroundModel& g) { return g.model->name(); });
   model.def_readwrite("sensor_height", &PyGroundModel::sensor_height, "Default sensor height above the ground [m].");
   model.def("segment", &PyGroundModel::segment, py::arg("points"), py::arg("ring") = py::none(),
@@ -590,14 +601,16 @@ PYBIND11_MODULE(_core, m) {
       "The vertical scan ground model (thesis 3.3) with settings: VerticalScanGround(params=None) where "
       "params is None (default settings), 'default' | 'thesis' | 'bins', a dict of overrides of the "
       "default settings, or a VerticalScanParams.");
-  vsg.def(py::init([](const py::object& params, float sensor_height) {
+  vsg.def(py::init([](const py::object& params, float sensor_height, const py::object& lidar) {
             auto g = std::make_unique<PyVerticalScanGround>();
             g->model = makeVerticalScanModel(paramsFrom(params));
+            if (!lidar.is_none()) g->model->setLidarModel(lidarFrom(lidar.cast<std::string>()));
             if (!std::isfinite(sensor_height) || sensor_height <= 0.f) throw py::value_error("sensor_height must be > 0 [m]");
             g->sensor_height = sensor_height;
             return g;
           }),
-          py::arg("params") = py::none(), py::arg("sensor_height") = kKittiSensorHeight);
+          py::arg("params") = py::none(), py::arg("sensor_height") = kKittiSensorHeight,
+          py::arg("lidar") = py::none());
   vsg.def_property("params", [](PyVerticalScanGround& g) { return g.vs()->params(); },
                    [](PyVerticalScanGround& g, const py::object& p) {
                      const VerticalScanParams params = paramsFrom(p);
@@ -613,6 +626,9 @@ PYBIND11_MODULE(_core, m) {
            py::arg("noise") = "datasheet")
       .def_static("hdl64e", [](const std::string& noise) { return sim::VelodyneModel::hdl64e(noiseFrom(noise)); },
                   py::arg("noise") = "datasheet", "HDL-64E; noise 'datasheet' (2 cm), 'table4.1' (0.2 m) or 'none'.")
+      .def_static("named", [](const std::string& name, const std::string& noise) {
+                    return sim::VelodyneModel::fromLidarModel(lidarFrom(name), noiseFrom(noise));
+                  }, py::arg("name"), py::arg("noise") = "datasheet", "A model of lidar_models() by name.")
       .def_readwrite("elevations_deg", &sim::VelodyneModel::elevations_deg)
       .def_readwrite("azimuth_steps", &sim::VelodyneModel::azimuth_steps)
       .def_readwrite("rate_hz", &sim::VelodyneModel::rate_hz)
@@ -622,6 +638,24 @@ PYBIND11_MODULE(_core, m) {
       .def_readwrite("start_azimuth", &sim::VelodyneModel::start_azimuth)
       .def_property_readonly("lasers", &sim::VelodyneModel::lasers)
       .def("validate", &sim::VelodyneModel::validate, "Empty when the model can be simulated, else the reason.");
+  m.def("lidar_models", []() {
+    py::list out;
+    for (const LidarModel& l : lidarModels()) {
+      py::dict d;
+      d["name"] = l.name;
+      d["description"] = l.description;
+      d["source"] = l.source;
+      d["elevations_deg"] = l.elevations_deg;
+      d["azimuth_steps"] = l.azimuth_steps;
+      d["rate_hz"] = l.rate_hz;
+      d["min_range"] = l.min_range;
+      d["max_range"] = l.max_range;
+      d["noise_sigma"] = l.noise_sigma;
+      d["mount_height"] = l.mount_height;
+      out.append(d);
+    }
+    return out;
+  }, "The lidar table (cloud/lidar_models.h): name, description, source, elevations_deg, ... per model.");
   m.def("hdl64e_elevations_deg", &sim::hdl64eElevationsDeg, "The HDL-64E's 64 laser elevations [deg], ring order.");
 
   py::class_<PyWorld>(m, "World", "A standard world of the simulator (world_names()), deterministic for a seed.")

@@ -16,7 +16,7 @@ import numpy as _np
 
 from ._core import (  # noqa: F401
     LABEL_GROUND, LABEL_OBSTACLE, LABEL_UNKNOWN, GroundModel, VelodyneModel, VerticalScanGround,
-    VerticalScanParams, World, ground_model_names, hdl64e_elevations_deg, read_kitti_bin,
+    VerticalScanParams, World, ground_model_names, hdl64e_elevations_deg, lidar_models, read_kitti_bin,
     read_semantic_kitti_label, score_ground, semantic_kitti_class_name, semantic_kitti_is_ground,
     surface_classes, world_names, write_outcome_png, write_png)
 from . import _core

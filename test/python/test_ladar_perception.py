@@ -227,25 +227,27 @@ def test_gil_is_released_during_segment(urban):
     old = sys.getswitchinterval()
     sys.setswitchinterval(0.0005)
     try:
-        done = threading.Event()
-
-        def worker():
-            for _ in range(3):
-                model.segment(big)
-            done.set()
-
-        thread = threading.Thread(target=worker)
-        last = time.perf_counter()
-        longest = 0.0
-        thread.start()
-        while not done.is_set():  # this thread keeps running while the core works
-            now = time.perf_counter()
-            longest = max(longest, now - last)
-            last = now
-        thread.join()
+        # Held GIL: this thread stops for a whole call, every time. A busy machine may also stop
+        # it for a while, so the best of three tries counts.
+        gaps = [longest_gap_while(lambda: [model.segment(big) for _ in range(3)]) for _ in range(3)]
     finally:
         sys.setswitchinterval(old)
-    assert longest < 0.5 * call, (longest, call)
+    assert min(gaps) < 0.5 * call, (gaps, call)
+
+
+def longest_gap_while(work):
+    """The longest pause of a busy loop in this thread while `work` runs in another."""
+    done = threading.Event()
+    thread = threading.Thread(target=lambda: (work(), done.set()))
+    last = time.perf_counter()
+    longest = 0.0
+    thread.start()
+    while not done.is_set():
+        now = time.perf_counter()
+        longest = max(longest, now - last)
+        last = now
+    thread.join()
+    return longest
 
 
 def test_simulator_models_and_worlds():
@@ -302,3 +304,21 @@ def test_example_script(urban, tmp_path):
                           "--png", str(tmp_path / "top.png")], check=True, capture_output=True, text=True)
     assert "F1" in out.stdout
     assert (tmp_path / "top.png").stat().st_size > 1000
+
+
+def test_lidar_models():
+    models = {m["name"]: m for m in lp.lidar_models()}
+    assert "hdl64e" in models and "vlp16" in models
+    assert len(models["vlp16"]["elevations_deg"]) == 16
+    vlp16 = lp.VelodyneModel.named("vlp16")
+    assert vlp16.lasers == 16
+    world = lp.World("flat")
+    pose = world.drive_pose(1.0)
+    pose[2, 3] += 1.73
+    points, ring, truth = world.scan(pose, vlp16)
+    assert ring.max() < 16
+    labels, _ = lp.VerticalScanGround(lidar="vlp16").segment(points)
+    score = lp.score_ground(points, lp.sim_truth_to_semantic_kitti(truth), labels)
+    assert score["f1"] > 0.9, score
+    with pytest.raises(ValueError):
+        lp.GroundModel("vertical_scan", lidar="no_such_lidar")
