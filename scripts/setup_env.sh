@@ -16,7 +16,7 @@ LADAR_DEB_PACKAGES=(
   libdiagnostic-updater-dev librosbag-dev python3-rosbag python3-rostest python3-roslaunch
   ros-core-dev rosbash rosout python3-rostopic python3-rosnode python3-rosservice
   python3-rosparam python3-yaml python3-numpy libgtest-dev libbenchmark-dev libyaml-cpp-dev
-  libpng-dev valgrind rviz ${LADAR_EXTRA_PACKAGES:-})
+  libpng-dev valgrind rviz pybind11-dev python3-pytest ${LADAR_EXTRA_PACKAGES:-})
 
 ensure_deps() {
   local missing=()
