@@ -299,6 +299,14 @@ const LidarModel& lidarFrom(const std::string& name) {
   return *m;
 }
 
+// What both model constructors share: the sensor (a name of lidar_models(), None: HDL-64E) and
+// the default sensor height, checked.
+void setUp(PyGroundModel* g, float sensor_height, const py::object& lidar) {
+  if (!lidar.is_none()) g->model->setLidarModel(lidarFrom(lidar.cast<std::string>()));
+  if (!std::isfinite(sensor_height) || sensor_height <= 0.f) throw py::value_error("sensor_height must be > 0 [m]");
+  g->sensor_height = sensor_height;
+}
+
 struct PyVerticalScanGround : PyGroundModel {
   VerticalScanGround* vs() { return static_cast<VerticalScanGround*>(model.get()); }
 };
@@ -582,9 +590,7 @@ PYBIND11_MODULE(_core, m) {
               std::string error;
               g->model = makeGroundModel(method, &error);
               if (!g->model) throw py::value_error(error);
-              if (!lidar.is_none()) g->model->setLidarModel(lidarFrom(lidar.cast<std::string>()));
-              if (!std::isfinite(sensor_height) || sensor_height <= 0.f) throw py::value_error("sensor_height must be > 0 [m]");
-              g->sensor_height = sensor_height;
+              setUp(g.get(), sensor_height, lidar);
               return g;
             }),
             py::arg("method") = "vertical_scan", py::arg("sensor_height") = kKittiSensorHeight,
@@ -604,9 +610,7 @@ PYBIND11_MODULE(_core, m) {
   vsg.def(py::init([](const py::object& params, float sensor_height, const py::object& lidar) {
             auto g = std::make_unique<PyVerticalScanGround>();
             g->model = makeVerticalScanModel(paramsFrom(params));
-            if (!lidar.is_none()) g->model->setLidarModel(lidarFrom(lidar.cast<std::string>()));
-            if (!std::isfinite(sensor_height) || sensor_height <= 0.f) throw py::value_error("sensor_height must be > 0 [m]");
-            g->sensor_height = sensor_height;
+            setUp(g.get(), sensor_height, lidar);
             return g;
           }),
           py::arg("params") = py::none(), py::arg("sensor_height") = kKittiSensorHeight,

@@ -326,9 +326,7 @@ struct SensorRow {
 // --mount-rpy R,P: the sensor rolled and pitched on its mount [deg] (SensorPose::fromMount); the
 // model is given the tilted pose, as tf would give it.
 void tiltMount(const std::vector<double>& rpy, EvaluationSensor* sensor) {
-  if (rpy.size() != 2) return;
-  const SensorPose tilted = SensorPose::fromMount(0.f, static_cast<float>(rpy[0]), static_cast<float>(rpy[1]));
-  sensor->mount.linear() = tilted.sensor_to_ground.linear().cast<double>();
+  if (rpy.size() == 2) sensor->tilt(rpy[0], rpy[1]);
 }
 
 double f1Of(const GroundAccuracy& a) {
@@ -426,14 +424,12 @@ int evaluateSensorTable(const std::vector<std::string>& sensors, const std::vect
         row.method = model->name();
         row.beams = sensor.lidar.beams();
         timed.reset();
-        std::size_t returns = 0;
         if (!evaluateGroundModel(sensor, w, &timed, scans, seed, &row.acc, &error)) {
           std::cerr << "ground_eval: " << s << " " << w << ": " << error << "\n";
           status = 1;
           continue;
         }
-        returns = row.acc.points;
-        row.points_per_scan = static_cast<double>(returns) / std::max<std::size_t>(row.acc.scans, 1);
+        row.points_per_scan = static_cast<double>(row.acc.points) / std::max<std::size_t>(row.acc.scans, 1);
         row.ms = medianMs(timed.milliseconds());
         if (instructions) row.instructions = countInstructions(s, w, m, sets, noise_name, scans, seed, mount_rpy);
         std::fprintf(stderr, "%s %s %s: F1 %.2f%%\n", s.c_str(), w.c_str(), row.method.c_str(), 100.0 * f1Of(row.acc));

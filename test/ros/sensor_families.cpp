@@ -31,10 +31,8 @@ lp::sim::SimulatedScan simulate(const std::string& sensor_name, double height, d
   lp::EvaluationSensor sensor;
   std::string error;
   EXPECT_TRUE(lp::makeEvaluationSensor(sensor_name, lp::sim::NoiseProfile::kDatasheet, &sensor, &error)) << error;
-  sensor.mount = Eigen::Isometry3d::Identity();
-  sensor.mount.linear() = lp::SensorPose::fromMount(0.f, static_cast<float>(roll_deg), static_cast<float>(pitch_deg))
-                              .sensor_to_ground.linear().cast<double>();
-  sensor.mount.translation().z() = height;
+  sensor.tilt(roll_deg, pitch_deg);
+  sensor.mount.translation() = Eigen::Vector3d(0.0, 0.0, height);
   lp::sim::World world;
   EXPECT_TRUE(lp::sim::makeStandardWorld("urban", 1, &world, &error)) << error;
   lp::sim::SimulatedScan scan;

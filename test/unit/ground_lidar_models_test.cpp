@@ -26,8 +26,7 @@ sim::SimulatedScan simulate(const std::string& name, const std::string& world_na
   EvaluationSensor sensor;
   std::string error;
   EXPECT_TRUE(makeEvaluationSensor(name, noise, &sensor, &error)) << error;
-  sensor.mount.linear() = SensorPose::fromMount(0.f, static_cast<float>(roll_deg), static_cast<float>(pitch_deg))
-                              .sensor_to_ground.linear().cast<double>();
+  sensor.tilt(roll_deg, pitch_deg);
   sim::World world;
   EXPECT_TRUE(sim::makeStandardWorld(world_name, 1, &world, &error)) << error;
   sim::SimulatedScan scan;
@@ -248,8 +247,7 @@ TEST(LidarModels, SparseAndTiltedSensorsSeparateGround) {
     EvaluationSensor sensor;
     std::string error;
     ASSERT_TRUE(makeEvaluationSensor(c.sensor, sim::NoiseProfile::kDatasheet, &sensor, &error)) << error;
-    sensor.mount.linear() = SensorPose::fromMount(0.f, static_cast<float>(c.roll), static_cast<float>(c.pitch))
-                                .sensor_to_ground.linear().cast<double>();
+    sensor.tilt(c.roll, c.pitch);
     VerticalScanGround model;
     GroundAccuracy acc;
     ASSERT_TRUE(evaluateGroundModel(sensor, c.world, &model, 3, 1, &acc, &error)) << error;

@@ -97,6 +97,12 @@ struct EvaluationSensor {
   LidarModel lidar;
   sim::VelodyneModel model;
   Eigen::Isometry3d mount = Eigen::Isometry3d::Identity();
+  // Rolls and pitches the sensor on its mount [deg] (SensorPose::fromMount conventions).
+  void tilt(double roll_deg, double pitch_deg) {
+    mount.linear() = SensorPose::fromMount(0.f, static_cast<float>(roll_deg), static_cast<float>(pitch_deg))
+                         .sensor_to_ground.linear()
+                         .cast<double>();
+  }
 };
 
 inline bool makeEvaluationSensor(const std::string& name, sim::NoiseProfile noise,

@@ -190,28 +190,35 @@ inline float VerticalScanGround::columnCoordinate(float x, float y) const {
 }
 
 void VerticalScanGround::readRingOrder(const PointCloudView& view) {
-  // Every 7th return (a stride prime to the usual beam counts): the highest ring, and the mean
-  // tan(elevation) = z / r (sensor frame) of
-  // the returns of the lower and the upper half of the ring numbers. Over a revolution a tilt
-  // averages out, so the half with the higher mean holds the upper beams.
+  // One pass over every 7th return (a stride prime to the usual beam counts): the highest ring,
+  // and per ring the sum of tan(elevation) = z / r (sensor frame). Then the mean of the lower
+  // and the upper half of the ring numbers: over a revolution a tilt averages out, so the half
+  // with the higher mean holds the upper beams.
   RingInfo info;
   info.source = view.ringSource();
   const std::size_t n = view.size();
+  double ring_sum[kMaxRingRows] = {};
+  std::size_t ring_count[kMaxRingRows] = {};
   int max_ring = -1;
-  for (std::size_t i = 0; i < n; i += 7) max_ring = std::max(max_ring, view.ring(i));
+  for (std::size_t i = 0; i < n; i += 7) {
+    const int ring = view.ring(i);
+    max_ring = std::max(max_ring, ring);
+    const Eigen::Vector3f p = view.xyz(i);
+    const float r = std::sqrt(p.x() * p.x() + p.y() * p.y());
+    if (!(r > 0.5f) || !std::isfinite(p.z())) continue;
+    const int k = ring < 0 ? 0 : (ring >= kMaxRingRows ? kMaxRingRows - 1 : ring);
+    ring_sum[k] += p.z() / r;
+    ++ring_count[k];
+  }
   if (info.source == PointCloudView::RingSource::kRows) max_ring = static_cast<int>(view.height()) - 1;
   info.max_ring = max_ring;
   info.top_ring = std::max(max_ring, row_table_.rows() - 1);
   const int mid = info.top_ring / 2;
   double sum[2] = {0.0, 0.0};
   std::size_t count[2] = {0, 0};
-  for (std::size_t i = 0; i < n; i += 7) {
-    const Eigen::Vector3f p = view.xyz(i);
-    const float r = std::sqrt(p.x() * p.x() + p.y() * p.y());
-    if (!(r > 0.5f) || !std::isfinite(p.z())) continue;
-    const int half = view.ring(i) > mid;
-    sum[half] += p.z() / r;
-    ++count[half];
+  for (int k = 0; k < kMaxRingRows; ++k) {
+    sum[k > mid] += ring_sum[k];
+    count[k > mid] += ring_count[k];
   }
   info.top_down = count[0] >= 16 && count[1] >= 16 &&
                   sum[0] / static_cast<double>(count[0]) > sum[1] / static_cast<double>(count[1]);
