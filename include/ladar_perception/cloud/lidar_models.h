@@ -32,10 +32,8 @@ struct LidarModel {
   bool organised = false;      // the driver publishes rows x columns clouds with empty slots
 
   int beams() const { return static_cast<int>(elevations_deg.size()); }
-  // The smallest and the mean spacing of adjacent beams [deg].
+  // The smallest spacing of adjacent beams [deg].
   float minSpacingDeg() const;
-  float meanSpacingDeg() const;
-  float horizontalResolutionDeg() const { return 360.f / static_cast<float>(azimuth_steps); }
 };
 
 // Every named model, HDL-64E first.

@@ -99,12 +99,6 @@ float LidarModel::minSpacingDeg() const {
   return gap;
 }
 
-float LidarModel::meanSpacingDeg() const {
-  if (elevations_deg.size() < 2) return 0.f;
-  return (elevations_deg.back() - elevations_deg.front()) /
-         static_cast<float>(elevations_deg.size() - 1);
-}
-
 const std::vector<LidarModel>& lidarModels() {
   static const std::vector<LidarModel> table = makeTable();
   return table;
