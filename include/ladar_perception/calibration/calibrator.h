@@ -114,6 +114,10 @@ struct CalibrationParams {
   // ... and extrapolates its steps at most this many times (sparse_extrapolation_steps' 5 made
   // it overshoot back and forth in x on the thinned target: seed 1's trial 7 ended 0.23 m off).
   int sparse_level_extrapolation_steps = 2;
+  // 3D targets: after the refinement the roles are swapped (the reference refined against the
+  // target's surface at the solution) and the two estimates averaged. Each direction's error
+  // comes mostly from the noise of its own surface model.
+  bool symmetric_refinement = true;
   double ground_z = 0.0;             // the ground's height in base_link [m]
   // 2D targets: hypotheses whose scan plane meets the ground within target_max_range at less than
   // this incidence are impossible (grazesGround, scan_plane.h) and score infinity. 0 = off.

@@ -224,6 +224,37 @@ SearchResult coarseSearch(const CalibrationParams& params, const CostFn& cost, S
   return multiScaleGradientDescent(cost, search, progress);
 }
 
+// The step s with applyStep(from, s) == to (refinement.h's parametrisation).
+Pose6 stepBetween(const Pose6& to, const Pose6& from) {
+  const Eigen::Isometry3d a = toIsometry(to), b = toIsometry(from);
+  const Eigen::AngleAxisd w(a.linear() * b.linear().transpose());
+  Pose6 step;
+  step.head<3>() = a.translation() - b.translation();
+  step.tail<3>() = w.angle() * w.axis();
+  return step;
+}
+
+// The refinement with the roles swapped (3D targets): the target, accumulated at `estimate`,
+// becomes the surface model, and the reference's extrinsic is refined against it from its known
+// value R. The reference's correction X moved onto the target, R X^-1 E, is that direction's
+// estimate of the target. Each direction's error comes mostly from the noise of its own surface
+// model, so the two errors are largely independent and their mean halves their variance.
+Pose6 swappedEstimate(const CalibrationInput& input, const CalibrationParams& params,
+                      const Pose6& estimate) {
+  PointVector target_cloud;
+  const Eigen::Isometry3d e = toIsometry(estimate);
+  accumulate(input.target, e, &target_cloud);
+  target_cloud = voxelDownsample(target_cloud, params.refinement.reference_voxel);
+  SurfaceModel target_model;
+  target_model.build(target_cloud, params.refinement);
+  const ScanSet reference = refinementTarget(input.reference, params.refinement);
+  RefinementParams rp = params.refinement;
+  rp.max_correspondence_start = rp.max_correspondence_end;  // already converged
+  const Pose6 r = fromIsometry(input.reference_extrinsic);
+  const Pose6 x = refine(target_model, reference, r, rp).extrinsic;
+  return fromIsometry(input.reference_extrinsic * toIsometry(x).inverse() * e);
+}
+
 CalibrationResult calibrateAttempt(const CalibrationInput& input,
                                    const CalibrationParams& params_in, const ProgressFn& progress,
                                    SharedModels* shared) {
@@ -347,6 +378,10 @@ CalibrationResult calibrateAttempt(const CalibrationInput& input,
     out.evaluations += out.refinement.iterations;
     lin = out.refinement.at_solution;
     out.final_cost = lin.cost;
+    if (!cancelled && !sparse && params.symmetric_refinement) {
+      const Pose6 swapped = swappedEstimate(input, params, estimate);
+      estimate = applyStep(estimate, 0.5 * stepBetween(swapped, estimate));
+    }
   }
   // A solution outside the search region: the coarse search settled in a wrong basin, and it
   // restarts with its next seed before the observability check is spent on it. So does a 2D
