@@ -363,6 +363,8 @@ void CalibrationRos::runCalibration(const ladar_perception::Calibrate::Request& 
   }
   params.bin_size = private_nh_.param("bin_size", params.bin_size);
   params.trim_fraction = private_nh_.param("trim_fraction", params.trim_fraction);
+  params.refinement.reference_voxel =
+      std::max(0.05, private_nh_.param("surface_voxel", params.refinement.reference_voxel));
   if (!readPose6(private_nh_, "spread", params.spread, &params.spread) ||
       !readPose6(private_nh_, "initial_guess", params.initial, &params.initial)) {
     return fail("~initial_guess and ~spread must be lists of 6 numbers (x y z roll pitch yaw)");

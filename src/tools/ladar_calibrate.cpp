@@ -30,7 +30,9 @@ void usage() {
          "         [--odom-frame odom] [--base-frame base_link] [--method NAME]\n"
          "         [--initial x,y,z,roll,pitch,yaw] [--spread x,y,z,roll,pitch,yaw]\n"
          "         [--output FILE.yaml] [--max-scans N] [--min-range M] [--max-range M]\n"
-         "         [--voxel M] [--repeatability W] [--quiet]\n"
+         "         [--voxel M] [--surface-voxel M] [--repeatability W] [--quiet]\n"
+         "--surface-voxel: the refinement's surface model voxel (default 0.2 m; 0.4 when a\n"
+         "  stereo camera is one of the pair)\n"
          "The target's extrinsic (base_link -> target frame) is searched around --initial; the\n"
          "reference's extrinsic comes from the bag's tf (base_link -> reference frame).\nmethods:";
   for (const std::string& m : cal::methodNames()) std::cerr << " " << m;
@@ -82,6 +84,7 @@ int main(int argc, char** argv) {
       else if (a == "--min-range") min_range = std::stod(value());
       else if (a == "--max-range") max_range = std::stod(value());
       else if (a == "--voxel") voxel = std::stod(value());
+      else if (a == "--surface-voxel") params.refinement.reference_voxel = std::max(0.05, std::stod(value()));
       else if (a == "--repeatability") windows = std::stoi(value());
       else if (a == "--quiet") quiet = true;
       else if (a == "--initial") {

@@ -833,6 +833,41 @@ TEST(CalibrationCalibrator, SwappedRolesCancelTheSurfaceModelBias) {
   for (int i = 3; i < 6; ++i) EXPECT_LT(std::abs(e2[i]), 0.001) << cal::dofName(i);
 }
 
+TEST(CalibrationExperiment, TurnsTrajectoryWeavesAlongTheDriveAndTheStereoFramesOnTheWay) {
+  lp::sim::World world;
+  std::string error;
+  ASSERT_TRUE(lp::sim::makeStandardWorld("urban", 1, &world, &error)) << error;
+  cal::PairSetup pair;
+  ASSERT_TRUE(cal::pairFromName("stereo-velodyne", &pair, &error)) << error;
+  cal::ExperimentOptions options;
+  options.trajectory = "turns";
+  cal::ExperimentTrial trial;
+  ASSERT_TRUE(cal::makeTrial(world, pair, options, 7, &trial, &error)) << error;
+  ASSERT_EQ(trial.vehicle_poses.size(), 10u);
+  const Eigen::Vector3d start = world.drivePose(0.0).translation();
+  const Eigen::Vector3d end = world.drivePose(world.driveDuration()).translation();
+  EXPECT_LT((trial.vehicle_poses.front().translation() - start).head<2>().norm(), 1e-6);
+  const Eigen::Vector2d along = (end - start).head<2>().normalized();
+  double max_offset = 0, max_yaw = 0;
+  for (const auto& pose : trial.vehicle_poses) {
+    const Eigen::Vector2d d = (pose.translation() - start).head<2>();
+    max_offset = std::max(max_offset, std::abs(d.x() * along.y() - d.y() * along.x()));
+    const double yaw = std::atan2(pose.linear()(1, 0), pose.linear()(0, 0)) -
+                       std::atan2(along.y(), along.x());
+    max_yaw = std::max(max_yaw, std::abs(cal::wrapAngle(yaw)));
+  }
+  EXPECT_GT(max_offset, 1.0);  // it weaves ...
+  EXPECT_LE(max_offset, options.turn_amplitude + 1e-6);
+  EXPECT_GT(max_yaw, 0.2);  // ... and turns
+  EXPECT_LT(max_yaw, std::atan(options.turn_amplitude * 2 * M_PI / options.turn_wavelength) + 1e-6);
+  // The Velodyne scans at the poses, the stereo camera at its own 10 Hz along the drive.
+  EXPECT_EQ(trial.input.reference.numScans(), 10u);
+  EXPECT_GT(trial.input.target.numScans(), 100u);
+  options.trajectory = "spiral";
+  EXPECT_FALSE(cal::makeTrial(world, pair, options, 7, &trial, &error));
+  EXPECT_NE(error.find("unknown trajectory"), std::string::npos) << error;
+}
+
 int main(int argc, char** argv) {
   testing::InitGoogleTest(&argc, argv);
   return RUN_ALL_TESTS();

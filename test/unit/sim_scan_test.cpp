@@ -290,6 +290,45 @@ TEST(SimScan, StereoDepthCloud) {
   }
 }
 
+TEST(SimScan, StereoDepthNoiseGrowsWithDepthSquared) {
+  // Looking straight down at flat ground, every pixel's depth (its x in the camera's body frame)
+  // is the height. The spread of the measured depth follows sigma_d z^2 / (f b), from the model's
+  // Table 4.1 0.5 m at its 12 m maximum range; its values are the sub-pixel disparity steps.
+  const StereoModel model = StereoModel::bumblebee();
+  EXPECT_NEAR(model.depthSigma(model.max_range), model.noise_sigma, 1e-12);
+  EXPECT_NEAR(model.depthSigma(3.0), model.noise_sigma * 9.0 / 144.0, 1e-12);
+  const double fb = model.focalPixels() * model.baseline;
+  for (double height : {3.0, 9.0}) {
+    Eigen::Isometry3d pose = at(0, 0, height);
+    pose.linear() = Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitY()).toRotationMatrix();
+    SimulatedScan scan;
+    simulateStereoFrame(standard("flat"), pose, model, 4, &scan);
+    PointCloudView view;
+    ASSERT_TRUE(scan.cloud.view(&view));
+    ASSERT_GT(view.size(), 10000u);
+    double sum = 0, sum2 = 0;
+    for (std::size_t i = 0; i < view.size(); ++i) {
+      const double depth = view.xyz(i).x();
+      const double steps = fb / depth / model.disparity_step_px;  // a whole number of steps
+      EXPECT_NEAR(steps, std::round(steps), 1e-3 * steps) << depth;
+      sum += depth - height;
+      sum2 += (depth - height) * (depth - height);
+    }
+    const double n = static_cast<double>(view.size());
+    const double sigma = std::sqrt(sum2 / n - (sum / n) * (sum / n));
+    EXPECT_NEAR(sigma, model.depthSigma(height), 0.1 * model.depthSigma(height)) << height;
+  }
+  // Without noise: exact depths, no rounding.
+  Eigen::Isometry3d pose = at(0, 0, 5.0);
+  pose.linear() = Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  SimulatedScan scan;
+  simulateStereoFrame(standard("flat"), pose, StereoModel::bumblebee(NoiseProfile::kNone), 4, &scan);
+  PointCloudView view;
+  ASSERT_TRUE(scan.cloud.view(&view));
+  ASSERT_GT(view.size(), 10000u);
+  for (std::size_t i = 0; i < view.size(); i += 97) EXPECT_NEAR(view.xyz(i).x(), 5.0, 1e-4);
+}
+
 TEST(SimScan, InvalidModelsGiveEmptyScans) {
   VelodyneModel model = VelodyneModel::hdl64e();
   model.azimuth_steps = 0;

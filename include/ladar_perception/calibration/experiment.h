@@ -31,6 +31,10 @@ struct PairSetup {
   SensorSetup target;
 };
 bool pairFromName(const std::string& name, PairSetup* out, std::string* error);
+// The calibration's settings for a pair's sensor kinds: the refinement's surface voxel 0.4 m when
+// one of them is a stereo camera (the 0.2 m default left the stereo camera 6-18 cm off along the
+// direction of travel against a Table 4.1 Velodyne), else the defaults.
+void adaptParamsToPair(const PairSetup& pair, CalibrationParams* params);
 std::vector<std::string> pairNames();
 
 struct ExperimentOptions {
@@ -49,7 +53,17 @@ struct ExperimentOptions {
   // with drive_speed <= 0, sick_scans_per_pose scans per segment. The 3D sensors scan once at
   // each pose (the thesis's 10 poses).
   double drive_speed = 2.0;
+  // "thesis": the poses above (random within max_offset and max_yaw). "turns": the vehicle weaves
+  // along the world's standard drive (start to end), a slalom of +-turn_amplitude metres with
+  // turn_wavelength metres between its repeats, the poses evenly along it, heading along the
+  // path: the sensors pass the scene's objects and turn (yaw up to ~0.56 rad at the defaults).
+  std::string trajectory = "thesis";
+  double turn_amplitude = 2.0;    // [m]
+  double turn_wavelength = 20.0;  // [m]
   int sick_scans_per_pose = 20;
+  // The stereo camera too frames at its own rate (10 Hz) along the drive, instead of once per
+  // pose: a camera that looks forward sees the scene's faces from many places.
+  bool stereo_while_driving = true;
   sim::NoiseProfile noise = sim::NoiseProfile::kTable41;
   // The reference sensor's noise instead of `noise` (experiments: which sensor's noise an error
   // comes from); the random streams are the same, so only the noise differs.

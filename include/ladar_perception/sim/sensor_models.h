@@ -77,7 +77,12 @@ struct SickModel {
 
 // A stereo camera giving a depth cloud: a pinhole grid of `columns` x `rows` rays over the
 // field of view, looking along the sensor's +x (body frame: x forward, y left, z up; not
-// the optical frame), 2-12 m, noise 0.5 m along the ray (Table 4.1).
+// the optical frame), 2-12 m. Depth comes from disparity, d = f b / depth (f the focal length
+// of the image_columns-wide disparity image in pixels, b the baseline), so the matcher's
+// disparity error makes the depth error grow with depth squared:
+// sigma_depth = depth^2 sigma_d / (f b). noise_sigma is that depth error at max_range (Table
+// 4.1's 0.5 m for the stereo camera, read as its worst case); sigma_d follows from it. The
+// disparity is then rounded to the matcher's sub-pixel step, and the point moved along its ray.
 struct StereoModel {
   double horizontal_fov = 1.2217304763960306;  // 70 degrees
   double vertical_fov = 0.9599310885968813;     // 55 degrees
@@ -86,7 +91,15 @@ struct StereoModel {
   double rate_hz = 10.0;
   double min_range = 2.0;
   double max_range = 12.0;
-  double noise_sigma = 0.5;
+  double noise_sigma = 0.5;         // depth error at max_range [m] (1 sigma)
+  double baseline = 0.12;           // [m] (Bumblebee2)
+  int image_columns = 640;          // the disparity image's width [pixels]
+  double disparity_step_px = 0.125; // the matcher's sub-pixel step (0 = not rounded)
+
+  double focalPixels() const;       // f of the disparity image
+  double disparitySigma() const;    // sigma_d [pixels]
+  // The depth error (1 sigma) at `depth` metres.
+  double depthSigma(double depth) const;
 
   static StereoModel bumblebee(NoiseProfile profile = NoiseProfile::kTable41);
   std::string validate() const;

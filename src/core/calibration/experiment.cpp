@@ -60,6 +60,12 @@ bool pairFromName(const std::string& name, PairSetup* out, std::string* error) {
   return true;
 }
 
+void adaptParamsToPair(const PairSetup& pair, CalibrationParams* params) {
+  if (pair.reference.kind == SensorKind::kStereo || pair.target.kind == SensorKind::kStereo) {
+    params->refinement.reference_voxel = std::max(params->refinement.reference_voxel, 0.4);
+  }
+}
+
 bool simulateSensor(const sim::World& world, const SensorSetup& sensor,
                     const Eigen::Isometry3d& vehicle_pose, sim::NoiseProfile noise, uint64_t seed,
                     PointVector* points, std::string* error) {
@@ -94,7 +100,28 @@ bool makeTrial(const sim::World& world, const PairSetup& pair, const ExperimentO
   pose_options.centre_y = options.centre_y;
   pose_options.max_yaw = options.max_yaw;
   std::vector<Eigen::Isometry3d> poses;
-  if (options.max_lateral >= 0) {
+  if (options.trajectory == "turns") {
+    if (world.driveDuration() <= 0.0 || options.poses < 2) {
+      if (error) *error = "trajectory 'turns' needs a world with a standard drive and >= 2 poses";
+      return false;
+    }
+    const Eigen::Vector2d a = world.drivePose(0.0).translation().head<2>();
+    const Eigen::Vector2d b = world.drivePose(world.driveDuration()).translation().head<2>();
+    const double length = (b - a).norm();
+    const Eigen::Vector2d along = (b - a) / std::max(length, 1e-9);
+    const Eigen::Vector2d left(-along.y(), along.x());
+    const double heading = std::atan2(along.y(), along.x());
+    const double k = 2.0 * M_PI / options.turn_wavelength;
+    for (int i = 0; i < options.poses; ++i) {
+      const double s = length * i / (options.poses - 1);  // distance along the drive
+      const Eigen::Vector2d p = a + s * along + options.turn_amplitude * std::sin(k * s) * left;
+      const double yaw = heading + std::atan(options.turn_amplitude * k * std::cos(k * s));
+      poses.push_back(world.vehiclePose(p.x(), p.y(), yaw));
+    }
+  } else if (options.trajectory != "thesis") {
+    if (error) *error = "unknown trajectory '" + options.trajectory + "' (thesis, turns)";
+    return false;
+  } else if (options.max_lateral >= 0) {
     sim::Rng pose_rng(sim::mix64(seed ^ 0x905e5ULL));
     for (int k = 0; k < options.poses; ++k) {
       const double x = options.centre_x + pose_rng.uniform(-1.0, 1.0) * options.max_offset;
@@ -115,6 +142,7 @@ bool makeTrial(const sim::World& world, const PairSetup& pair, const ExperimentO
   PointVector points;
   uint64_t stream = sim::mix64(seed);
   const double sick_rate = sim::SickModel::lms291(options.noise).rate_hz;
+  const double stereo_rate = sim::StereoModel::bumblebee(options.noise).rate_hz;
   double segment_start = 0.0;  // [s]
   for (std::size_t k = 0; k < poses.size(); ++k) {
     const bool last = k + 1 >= poses.size();
@@ -124,11 +152,15 @@ bool makeTrial(const sim::World& world, const PairSetup& pair, const ExperimentO
     for (int side = 0; side < 2; ++side) {
       const SensorSetup& s = side == 0 ? pair.reference : pair.target;
       ScanSet& set = side == 0 ? out->input.reference : out->input.target;
-      const bool sweep = s.kind == SensorKind::kSick;
+      // The 2D ladar and the stereo camera keep their own rate along the drive; the Velodyne
+      // scans once at each pose (the thesis's set-up).
+      const bool sweep = s.kind == SensorKind::kSick ||
+                         (s.kind == SensorKind::kStereo && options.stereo_while_driving);
+      const double rate = s.kind == SensorKind::kSick ? sick_rate : stereo_rate;
       int repeats = 1;
       if (sweep) {
         repeats = options.drive_speed > 0
-                      ? (last ? 1 : std::max(1, static_cast<int>(std::lround(duration * sick_rate))))
+                      ? (last ? 1 : std::max(1, static_cast<int>(std::lround(duration * rate))))
                       : std::max(1, options.sick_scans_per_pose);
       }
       for (int r = 0; r < repeats; ++r) {
@@ -145,7 +177,7 @@ bool makeTrial(const sim::World& world, const PairSetup& pair, const ExperimentO
         const sim::NoiseProfile noise =
             side == 0 && options.reference_noise_set ? options.reference_noise : options.noise;
         if (!simulateSensor(world, s, vehicle, noise, stream, &points, error)) return false;
-        set.addScan(segment_start + (sweep ? r / sick_rate : 0.0), vehicle, points);
+        set.addScan(segment_start + (sweep ? r / rate : 0.0), vehicle, points);
       }
     }
     segment_start += duration;

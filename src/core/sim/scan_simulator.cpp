@@ -311,6 +311,9 @@ void simulateStereoFrame(const World& world, const Eigen::Isometry3d& sensor_in_
   const double half_w = std::tan(0.5 * model.horizontal_fov), half_h = std::tan(0.5 * model.vertical_fov);
   GaussianStream noise(seed);
   RayHit hit;
+  const double fb = model.focalPixels() * model.baseline;  // disparity * depth [px m]
+  const double sigma_d = model.disparitySigma();
+  const double step = model.disparity_step_px;
   for (int row = 0; row < model.rows; ++row) {
     const double v = half_h * (1.0 - 2.0 * (row + 0.5) / model.rows);  // top row looks up
     for (int col = 0; col < model.columns; ++col) {
@@ -318,11 +321,16 @@ void simulateStereoFrame(const World& world, const Eigen::Isometry3d& sensor_in_
       const Eigen::Vector3d ds = Eigen::Vector3d(1.0, u, v).normalized();
       const Eigen::Vector3d dw = R * ds;
       if (!castRay(world, origin, dw, model.max_range, &hit)) continue;
-      double r;
-      if (!noisyRange(hit.range, model.noise_sigma, model.min_range, model.max_range, &noise,
-                      static_cast<uint64_t>(row) * model.columns + col, &r)) {
-        continue;
+      // Depth from a noisy, sub-pixel-rounded disparity, moved along the ray (StereoModel).
+      double r = hit.range;
+      if (sigma_d > 0.0) {
+        const double depth = hit.range * ds.x();
+        double d = fb / depth + sigma_d * noise.at(static_cast<uint64_t>(row) * model.columns + col);
+        if (step > 0.0) d = step * std::round(d / step);
+        if (!(d > 0.0)) continue;  // beyond infinity: the matcher gives no depth
+        r = hit.range * (fb / d) / depth;
       }
+      if (r < model.min_range || r > model.max_range) continue;
       putFloat(dst + 0, static_cast<float>(ds.x() * r));
       putFloat(dst + 4, static_cast<float>(ds.y() * r));
       putFloat(dst + 8, static_cast<float>(ds.z() * r));

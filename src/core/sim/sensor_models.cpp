@@ -101,6 +101,18 @@ StereoModel StereoModel::bumblebee(NoiseProfile profile) {
   return m;
 }
 
+double StereoModel::focalPixels() const {
+  return 0.5 * image_columns / std::tan(0.5 * horizontal_fov);
+}
+
+double StereoModel::disparitySigma() const {
+  return noise_sigma * focalPixels() * baseline / (max_range * max_range);
+}
+
+double StereoModel::depthSigma(double depth) const {
+  return depth * depth * disparitySigma() / (focalPixels() * baseline);
+}
+
 std::string StereoModel::validate() const {
   if (columns < 1 || rows < 1 || columns * static_cast<long>(rows) > 4000000) return "stereo needs 1..4e6 pixels";
   if (!(horizontal_fov > 0.0 && horizontal_fov < 3.1) || !(vertical_fov > 0.0 && vertical_fov < 3.1)) {
@@ -109,6 +121,8 @@ std::string StereoModel::validate() const {
   if (!(rate_hz > 0.0)) return "stereo rate_hz must be positive";
   if (!(min_range >= 0.0) || !(max_range > min_range)) return "stereo needs 0 <= min_range < max_range";
   if (!(noise_sigma >= 0.0)) return "stereo noise_sigma must be >= 0";
+  if (!(baseline > 0.0) || image_columns < 1) return "stereo needs baseline > 0 and image_columns >= 1";
+  if (!(disparity_step_px >= 0.0)) return "stereo disparity_step_px must be >= 0";
   return "";
 }
 

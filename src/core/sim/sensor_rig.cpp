@@ -197,6 +197,8 @@ bool parseRoot(const YAML::Node& root, SensorRig* rig, std::string* error) {
         break;
       case SensorKind::kStereo:
         readOptional(s, "noise_sigma", &m.stereo.noise_sigma);
+        readOptional(s, "baseline", &m.stereo.baseline);
+        readOptional(s, "disparity_step_px", &m.stereo.disparity_step_px);
         readOptional(s, "min_range", &m.stereo.min_range);
         readOptional(s, "max_range", &m.stereo.max_range);
         readOptional(s, "rate_hz", &m.stereo.rate_hz);
