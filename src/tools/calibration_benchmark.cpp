@@ -50,7 +50,8 @@ void usage() {
          "  plane_sweep_fine_points, plane_sweep_fine_iterations, sparse_extrapolation_steps,\n"
          "  sparse_final_iterations, coarse_restarts, plane_sweep_consistency,\n"
          "  sparse_level_keep_every, sparse_level_normal_z, sparse_level_extrapolation_steps,\n"
-         "  score_cluster, symmetric_refinement\n"
+         "  score_cluster, symmetric_refinement, noise_floor, range_noise, range_noise_per_m2,\n"
+         "  reference_noise\n"
          "--reference-noise NAME: the reference sensor's noise profile instead of --noise's (the\n"
          "  same random streams: only that sensor's noise differs)\n"
          "--only T: run trial T alone (0-based; the same data and seeds as in the full run)\n"
@@ -481,6 +482,10 @@ int main(int argc, char** argv) {
     else if (k == "plane_sweep_consistency") params.plane_sweep_consistency = v;
     else if (k == "score_cluster") params.observability.score_cluster = v;
     else if (k == "symmetric_refinement") params.symmetric_refinement = v != 0;
+    else if (k == "noise_floor") params.refinement.noise_floor = v;
+    else if (k == "range_noise") params.refinement.range_noise = v;
+    else if (k == "range_noise_per_m2") params.refinement.range_noise_per_m2 = v;
+    else if (k == "reference_noise") params.refinement.reference_noise = v;
     else {
       std::cerr << "unknown --set parameter " << k << "\n";
       return 2;

@@ -65,6 +65,10 @@ struct RefinementParams {
   // to score the members of a 2D ladar's ground-line sweep (CalibrationParams::sparse_range_noise).
   double range_noise = 0.0;
   double reference_noise = 0.0;  // [m] the floor of the reference plane's uncertainty
+  // [1/m] A target whose range noise grows with range squared (a stereo camera: depth from
+  // disparity, sigma = depth^2 sigma_d / (f b)): its range noise at range r is range_noise +
+  // range_noise_per_m2 r^2, in the weighting above (with noise_floor > 0). 0 = constant.
+  double range_noise_per_m2 = 0.0;
   // When > 0: after each Gauss-Newton step the step doubled, up to this many times, is tried and
   // kept while the robust cost over all target points (robustCostOverAll) keeps falling. Along a
   // weak direction (a 2D ladar's x and y over mostly flat ground) the nearest-neighbour
@@ -126,8 +130,10 @@ struct Linearisation {
 Linearisation linearise(const SurfaceModel& model, const ScanSet& target, const Pose6& extrinsic,
                         double max_correspondence, double huber, double noise_floor = 0.0,
                         double range_noise = 0.0, double reference_noise = 0.0,
-                        std::vector<float>* point_loss = nullptr, double score_cluster = 0.0);
-// The same with the weighting of `params` (noise_floor, range_noise, reference_noise, huber).
+                        std::vector<float>* point_loss = nullptr, double score_cluster = 0.0,
+                        double range_noise_per_m2 = 0.0);
+// The same with the weighting of `params` (noise_floor, range_noise, range_noise_per_m2,
+// reference_noise, huber).
 // point_loss, when given: each target point's Huber loss, NaN without a correspondence (sized
 // once per call, not per point). score_cluster > 0 [m]: also the score covariance over clusters
 // of that size (Linearisation::score_covariance).

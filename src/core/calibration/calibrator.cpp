@@ -250,6 +250,9 @@ Pose6 swappedEstimate(const CalibrationInput& input, const CalibrationParams& pa
   const ScanSet reference = refinementTarget(input.reference, params.refinement);
   RefinementParams rp = params.refinement;
   rp.max_correspondence_start = rp.max_correspondence_end;  // already converged
+  // The weighting by the target's range noise describes the target, not the reference.
+  rp.noise_floor = 0.0;
+  rp.range_noise_per_m2 = 0.0;
   const Pose6 r = fromIsometry(input.reference_extrinsic);
   const Pose6 x = refine(target_model, reference, r, rp).extrinsic;
   return fromIsometry(input.reference_extrinsic * toIsometry(x).inverse() * e);

@@ -66,14 +66,15 @@ void SurfaceModel::build(const PointVector& points, const RefinementParams& para
 Linearisation linearise(const SurfaceModel& model, const ScanSet& target, const Pose6& extrinsic,
                         double max_correspondence, double huber, double noise_floor,
                         double range_noise, double reference_noise,
-                        std::vector<float>* point_loss, double score_cluster) {
+                        std::vector<float>* point_loss, double score_cluster,
+                        double range_noise_per_m2) {
   Linearisation lin;
   if (point_loss) point_loss->assign(target.numPoints(), std::numeric_limits<float>::quiet_NaN());
   if (model.empty()) return lin;
   const Eigen::Isometry3d t_bs = toIsometry(extrinsic);
   const Eigen::Matrix3d r_bs = t_bs.linear();
   const float max2 = static_cast<float>(max_correspondence * max_correspondence);
-  const bool range_weighted = noise_floor > 0 && range_noise > 0;
+  const bool range_weighted = noise_floor > 0 && (range_noise > 0 || range_noise_per_m2 > 0);
   const double nf2 = noise_floor * noise_floor, rn2 = range_noise * range_noise;
   const double ref2 = reference_noise * reference_noise;
   const double inv_k = 1.0 / std::max(1, model.neighbours());
@@ -106,11 +107,16 @@ Linearisation linearise(const SurfaceModel& model, const ScanSet& target, const 
       if (noise_floor > 0) {
         const double sj2 = static_cast<double>(model.spreads()[j]) * model.spreads()[j];
         if (range_weighted) {
-          double var = rn2 + sj2;  // edge: the whole range error is in the residual
+          double rn2_here = rn2;
+          if (range_noise_per_m2 > 0) {  // sigma = range_noise + range_noise_per_m2 r^2
+            const double sigma = range_noise + range_noise_per_m2 * ps.squaredNorm();
+            rn2_here = sigma * sigma;
+          }
+          double var = rn2_here + sj2;  // edge: the whole range error is in the residual
           if (!edge) {
             const double un = (po - p_os).cast<double>().dot(nrm) /
                               std::max(1e-6, static_cast<double>(ps.norm()));
-            var = rn2 * un * un + sj2 * inv_k + ref2;
+            var = rn2_here * un * un + sj2 * inv_k + ref2;
           }
           scale = noise_floor / std::sqrt(std::max(var, 1e-12));
         } else {
@@ -184,7 +190,8 @@ Linearisation linearise(const SurfaceModel& model, const ScanSet& target, const 
                         double max_correspondence, const RefinementParams& params,
                         std::vector<float>* point_loss, double score_cluster) {
   return linearise(model, target, extrinsic, max_correspondence, params.huber, params.noise_floor,
-                   params.range_noise, params.reference_noise, point_loss, score_cluster);
+                   params.range_noise, params.reference_noise, point_loss, score_cluster,
+                   params.range_noise_per_m2);
 }
 
 double robustCostOverAll(const Linearisation& lin, std::size_t target_points,
