@@ -29,6 +29,59 @@ using ladar_perception::RgbImage;
 
 namespace {
 
+// --drift: the drift monitor on a simulated drive (experiment.h runDriftDrive): every check,
+// then the false alarms before the bump, the time to ERROR after it and the CPU per check.
+int runDrift(const sim::World& world, const std::string& world_name, const cal::PairSetup& pair,
+             const cal::DriftDriveOptions& options, uint64_t seed, bool quiet) {
+  const cal::DriftMonitorParams params;
+  std::printf("drift monitor: pair %s, world %s, %.0f s drive at %.1f m/s, scans every %.1f s, "
+              "checks every %.1f s, window %.0f s, seed %llu",
+              pair.name.c_str(), world_name.c_str(), options.duration, options.speed,
+              options.scan_interval, options.check_interval, params.window,
+              static_cast<unsigned long long>(seed));
+  if (options.bump_time >= 0) {
+    std::printf(", bump at %.0f s: %g %g %g m, %g %g %g rad", options.bump_time, options.bump[0],
+                options.bump[1], options.bump[2], options.bump[3], options.bump[4], options.bump[5]);
+  }
+  std::printf("\n");
+  cal::DriftDriveResult result;
+  std::string error;
+  const bool ok = cal::runDriftDrive(
+      world, pair, params, options, seed, &result, &error, [quiet](const cal::DriftCheck& c) {
+        if (quiet) return;
+        const cal::DriftEstimate& e = c.estimate;
+        std::printf("t %6.1f s %-7s offset x %+.4f y %+.4f z %+.4f m, roll %+.5f pitch %+.5f yaw "
+                    "%+.5f rad, cpu %.2f s; %s\n",
+                    c.time, cal::driftLevelName(e.level), e.offset[0], e.offset[1], e.offset[2],
+                    e.offset[3], e.offset[4], e.offset[5], e.cpu_time, e.message.c_str());
+        std::fflush(stdout);
+      });
+  if (!ok) {
+    std::fprintf(stderr, "%s\n", error.c_str());
+    return 1;
+  }
+  double worst_t = 0, worst_r = 0;  // the largest offsets before the bump
+  for (const cal::DriftCheck& c : result.checks) {
+    if (options.bump_time >= 0 && c.time >= options.bump_time) continue;
+    if (!c.estimate.estimated) continue;
+    worst_t = std::max(worst_t, c.estimate.offset.head<3>().cwiseAbs().maxCoeff());
+    worst_r = std::max(worst_r, c.estimate.offset.tail<3>().cwiseAbs().maxCoeff());
+  }
+  std::printf("checks %zu; before the bump: %d WARN, %d ERROR, largest offset %.4f m and %.5f rad",
+              result.checks.size(), result.warn_before, result.error_before, worst_t, worst_r);
+  if (options.bump_time >= 0) {
+    if (result.detected_after >= 0) {
+      std::printf("; ERROR %.0f s after the bump", result.detected_after);
+    } else {
+      std::printf("; the bump never reached ERROR");
+    }
+  }
+  std::printf("\nCPU per check: mean %.2f s, max %.2f s (%.1f%% of one core at a check every %.0f s)\n",
+              result.mean_check_cpu, result.max_check_cpu,
+              100.0 * result.mean_check_cpu / options.check_interval, options.check_interval);
+  return 0;
+}
+
 std::string fmt1(double v) {
   char b[32];
   std::snprintf(b, sizeof(b), "%.1f", v);
@@ -58,6 +111,9 @@ void usage() {
          "--drive-speed: the vehicle's speed between poses; a 2D ladar and a stereo camera scan\n"
          "  at their own rate along the way (default 2 m/s; 0 = 20 scans per segment)\n"
          "--stereo-at-poses: the stereo camera frames once per pose only (the thesis's set-up)\n"
+         "--drift [--duration S] [--bump x,y,z,roll,pitch,yaw --bump-at T]: the drift monitor\n"
+         "  on a drive back and forth along the world's drive (a 3D pair), checks every 4 s; prints\n"
+         "  the false alarms before the bump, the time to ERROR after it, the CPU per check\n"
          "--trajectory thesis|turns: random poses around the centre (the thesis's), or a slalom\n"
          "  of +-2 m, 20 m wavelength, along the world's standard drive\n"
          "--sparse-noise-floor: 2D targets' residual weighting by the reference's local noise\n"
@@ -338,6 +394,8 @@ int main(int argc, char** argv) {
   std::vector<std::pair<std::string, double>> settings;
   double drive_speed = cal::ExperimentOptions().drive_speed;
   bool stereo_at_poses = false;
+  bool drift = false;
+  cal::DriftDriveOptions drift_options;
   std::string trajectory = "thesis";
   double sparse_noise_floor = cal::CalibrationParams().sparse_noise_floor;
   double sparse_range_noise = cal::CalibrationParams().sparse_range_noise;
@@ -381,6 +439,19 @@ int main(int argc, char** argv) {
       else if (a == "--sparse-range-noise") sparse_range_noise = std::stod(value("--sparse-range-noise"));
       else if (a == "--sparse-reference-noise") sparse_reference_noise = std::stod(value("--sparse-reference-noise"));
       else if (a == "--disk") corridor_given = true;  // the thesis's disk of poses on any world
+      else if (a == "--drift") drift = true;
+      else if (a == "--duration") drift_options.duration = std::stod(value("--duration"));
+      else if (a == "--bump-at") drift_options.bump_time = std::stod(value("--bump-at"));
+      else if (a == "--bump") {
+        std::stringstream ss(value("--bump"));
+        std::string item;
+        int k = 0;
+        while (std::getline(ss, item, ',')) {
+          if (k >= 6) throw std::invalid_argument("bump");
+          drift_options.bump[k++] = std::stod(item);
+        }
+        if (k != 6) throw std::invalid_argument("bump");
+      }
       else if (a == "--centre") {
         const std::string v = value("--centre");
         const std::size_t comma = v.find(',');
@@ -447,6 +518,10 @@ int main(int argc, char** argv) {
   if (!sim::makeStandardWorld(world_name, static_cast<uint32_t>(seed), &world, &error)) {
     std::cerr << error << "\n";
     return 2;
+  }
+  if (drift) {
+    drift_options.noise = options.noise;
+    return runDrift(world, world_name, pair, drift_options, seed, quiet);
   }
   cal::CalibrationParams params =
       method == "particle_filter" ? cal::thesisParticleFilterParams() : cal::CalibrationParams();

@@ -5,10 +5,12 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
 #include "ladar_perception/calibration/calibrator.h"
+#include "ladar_perception/calibration/drift_monitor.h"
 #include "ladar_perception/sim/sensor_models.h"
 #include "ladar_perception/sim/world.h"
 
@@ -88,6 +90,38 @@ bool makeTrial(const sim::World& world, const PairSetup& pair, const ExperimentO
 bool simulateSensor(const sim::World& world, const SensorSetup& sensor,
                     const Eigen::Isometry3d& vehicle_pose, sim::NoiseProfile noise, uint64_t seed,
                     PointVector* points, std::string* error);
+
+// The drift monitor's experiment (drift_monitor.h): the vehicle drives back and forth along the
+// world's standard drive at `speed`, weaving +-1.5 m every 25 m; both sensors scan every
+// scan_interval seconds, the monitor checks every check_interval; at bump_time the target's
+// true mount moves by `bump` while the monitor keeps the configured one.
+struct DriftDriveOptions {
+  double duration = 60.0;       // [s]
+  double speed = 1.5;           // [m/s]
+  double scan_interval = 2.0;   // [s]
+  double check_interval = 4.0;  // [s]
+  double bump_time = -1.0;      // [s], < 0: no bump
+  Pose6 bump = Pose6::Zero();
+  sim::NoiseProfile noise = sim::NoiseProfile::kDatasheet;
+};
+
+struct DriftCheck {
+  double time = 0;  // [s] of the drive
+  DriftEstimate estimate;
+};
+
+struct DriftDriveResult {
+  std::vector<DriftCheck> checks;
+  int warn_before = 0, error_before = 0;  // checks at WARN / ERROR before the bump (false alarms)
+  double detected_after = -1;             // [s] from the bump to the first ERROR; -1 never
+  double max_check_cpu = 0, mean_check_cpu = 0;  // [s]
+};
+
+// `on_check`, when given, sees every check as it happens.
+bool runDriftDrive(const sim::World& world, const PairSetup& pair, const DriftMonitorParams& params,
+                   const DriftDriveOptions& options, uint64_t seed, DriftDriveResult* out,
+                   std::string* error,
+                   const std::function<void(const DriftCheck&)>& on_check = nullptr);
 
 }  // namespace calibration
 }  // namespace ladar_perception

@@ -185,5 +185,73 @@ bool makeTrial(const sim::World& world, const PairSetup& pair, const ExperimentO
   return true;
 }
 
+namespace {
+
+// Back and forth along the world's drive (start to end and back), weaving.
+Eigen::Isometry3d driftDrivePose(const sim::World& world, double distance) {
+  const Eigen::Vector2d a = world.drivePose(0.0).translation().head<2>();
+  const Eigen::Vector2d b = world.drivePose(world.driveDuration()).translation().head<2>();
+  const double length = std::max((b - a).norm(), 1.0);
+  const Eigen::Vector2d along = (b - a) / length;
+  const Eigen::Vector2d left(-along.y(), along.x());
+  const double lap = std::fmod(distance, 2.0 * length);
+  const bool back = lap > length;
+  const double s = back ? 2.0 * length - lap : lap;  // position along the drive
+  const double k = 2.0 * M_PI / 25.0, amplitude = 1.5;
+  const Eigen::Vector2d p = a + s * along + amplitude * std::sin(k * s) * left;
+  const double slope = std::atan(amplitude * k * std::cos(k * s));
+  const double heading = std::atan2(along.y(), along.x()) + (back ? M_PI - slope : slope);
+  return world.vehiclePose(p.x(), p.y(), wrapAngle(heading));
+}
+
+}  // namespace
+
+bool runDriftDrive(const sim::World& world, const PairSetup& pair, const DriftMonitorParams& params,
+                   const DriftDriveOptions& options, uint64_t seed, DriftDriveResult* out,
+                   std::string* error, const std::function<void(const DriftCheck&)>& on_check) {
+  *out = DriftDriveResult();
+  if (world.driveDuration() <= 0.0 || !(options.scan_interval > 0.0) ||
+      !(options.check_interval > 0.0)) {
+    if (error) *error = "the drift drive needs a world with a standard drive and positive intervals";
+    return false;
+  }
+  DriftMonitor monitor(params, toIsometry(pair.reference.extrinsic), pair.target.extrinsic);
+  SensorSetup target = pair.target;
+  PointVector points;
+  double next_check = options.check_interval;
+  double cpu_sum = 0;
+  uint64_t stream = sim::mix64(seed);
+  for (int step = 0;; ++step) {
+    const double t = step * options.scan_interval;
+    if (t > options.duration + 1e-9) break;
+    const bool bumped = options.bump_time >= 0.0 && t >= options.bump_time;
+    target.extrinsic = bumped ? Pose6(pair.target.extrinsic + options.bump) : pair.target.extrinsic;
+    const Eigen::Isometry3d vehicle = driftDrivePose(world, options.speed * t);
+    stream = sim::mix64(stream + 1);
+    if (!simulateSensor(world, pair.reference, vehicle, options.noise, stream, &points, error)) return false;
+    monitor.addReferenceScan(t, vehicle, points);
+    stream = sim::mix64(stream + 1);
+    if (!simulateSensor(world, target, vehicle, options.noise, stream, &points, error)) return false;
+    monitor.addTargetScan(t, vehicle, points);
+    if (t + 1e-9 < next_check) continue;
+    next_check += options.check_interval;
+    DriftCheck check;
+    check.time = t;
+    check.estimate = monitor.check();
+    cpu_sum += check.estimate.cpu_time;
+    out->max_check_cpu = std::max(out->max_check_cpu, check.estimate.cpu_time);
+    if (!bumped) {
+      out->warn_before += check.estimate.level == DriftLevel::kWarn;
+      out->error_before += check.estimate.level == DriftLevel::kError;
+    } else if (check.estimate.level == DriftLevel::kError && out->detected_after < 0) {
+      out->detected_after = t - options.bump_time;
+    }
+    if (on_check) on_check(check);
+    out->checks.push_back(check);
+  }
+  if (!out->checks.empty()) out->mean_check_cpu = cpu_sum / out->checks.size();
+  return true;
+}
+
 }  // namespace calibration
 }  // namespace ladar_perception
