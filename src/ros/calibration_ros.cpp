@@ -37,8 +37,6 @@ bool calibrationPoints(const sensor_msgs::LaserScan& msg, cal::PointVector* poin
   return true;
 }
 
-namespace {
-
 bool readPose6(const ros::NodeHandle& nh, const std::string& name, const cal::Pose6& fallback,
                cal::Pose6* out) {
   *out = fallback;
@@ -56,6 +54,8 @@ bool readPose6(const ros::NodeHandle& nh, const std::string& name, const cal::Po
   }
   return true;
 }
+
+namespace {
 
 std::string poseText(const cal::Pose6& p) {
   std::ostringstream s;

@@ -10,7 +10,7 @@
 #include <geometry_msgs/TransformStamped.h>
 #include <tf2_eigen/tf2_eigen.h>
 
-#include "ladar_perception/ros/calibration_ros.h"  // calibrationPoints
+#include "ladar_perception/ros/calibration_ros.h"  // calibrationPoints, readPose6
 #include "ladar_perception/ros/cloud_conversion.h"
 
 namespace ladar_perception {
@@ -19,14 +19,6 @@ namespace cal = calibration;
 
 namespace {
 constexpr std::size_t kMaxPending = 40;  // scans waiting for tf (20 per sensor at the defaults)
-
-bool readPose6(const ros::NodeHandle& nh, const std::string& name, cal::Pose6* out) {
-  std::vector<double> v;
-  if (!nh.getParam(name, v)) return true;
-  if (v.size() != 6) return false;
-  for (int i = 0; i < 6; ++i) (*out)[i] = v[i];
-  return true;
-}
 }  // namespace
 
 DriftMonitorRos::DriftMonitorRos(ros::NodeHandle nh, ros::NodeHandle private_nh)
@@ -54,7 +46,7 @@ DriftMonitorRos::DriftMonitorRos(ros::NodeHandle nh, ros::NodeHandle private_nh)
   params_.error_checks = std::max(1, private_nh_.param("error_checks", params_.error_checks));
   params_.calibration.refinement.reference_voxel = std::max(
       0.05, private_nh_.param("surface_voxel", params_.calibration.refinement.reference_voxel));
-  if (!readPose6(private_nh_, "spread", &params_.spread)) {
+  if (!readPose6(private_nh_, "spread", params_.spread, &params_.spread)) {
     ROS_ERROR("DriftMonitor: ~spread must be a list of 6 numbers (x y z roll pitch yaw); using "
               "the default");
     params_.spread = cal::DriftMonitorParams().spread;

@@ -43,6 +43,11 @@ bool calibrationPoints(const sensor_msgs::PointCloud2& msg, double min_range, do
 bool calibrationPoints(const sensor_msgs::LaserScan& msg, calibration::PointVector* points,
                        std::string* error);
 
+// A parameter holding x y z roll pitch yaw (numbers, int or double): *out = fallback when unset;
+// false when set but not a list of 6 numbers.
+bool readPose6(const ros::NodeHandle& nh, const std::string& name,
+               const calibration::Pose6& fallback, calibration::Pose6* out);
+
 class CalibrationRos {
  public:
   // nh: topics `reference` and `target` (remap them); private_nh: parameters, services,
