@@ -65,19 +65,18 @@ DriftMonitorRos::DriftMonitorRos(ros::NodeHandle nh, ros::NodeHandle private_nh)
     const std::string topic = target ? "target" : "reference";
     const std::string type =
         private_nh_.param<std::string>(topic + "_type", "PointCloud2");
-    if (type == "LaserScan") {
-      subscribers_[s] = nh_.subscribe<sensor_msgs::LaserScan>(
-          topic, queue,
-          [this, target](const sensor_msgs::LaserScanConstPtr& m) { scanCallback(m, target); });
-    } else {
-      if (type != "PointCloud2") {
-        ROS_ERROR_STREAM("DriftMonitor: ~" << topic << "_type must be PointCloud2 or LaserScan, not '"
-                         << type << "'; using PointCloud2");
-      }
-      subscribers_[s] = nh_.subscribe<sensor_msgs::PointCloud2>(
-          topic, queue,
-          [this, target](const sensor_msgs::PointCloud2ConstPtr& m) { cloudCallback(m, target); });
+    // One 2D line every scan_interval is far too little to re-estimate a mount: 3D sensors only
+    // (a 2D ladar's drift is not measured; calibrate it offline with Calibration).
+    if (type != "PointCloud2") {
+      std::lock_guard<std::mutex> lock(status_mutex_);
+      config_error_ = "~" + topic + "_type '" + type + "' is not supported: the drift monitor " +
+                      "watches 3D sensors (PointCloud2) only";
+      ROS_ERROR_STREAM("DriftMonitor: " << config_error_);
+      continue;
     }
+    subscribers_[s] = nh_.subscribe<sensor_msgs::PointCloud2>(
+        topic, queue,
+        [this, target](const sensor_msgs::PointCloud2ConstPtr& m) { cloudCallback(m, target); });
   }
 }
 
@@ -117,24 +116,6 @@ void DriftMonitorRos::cloudCallback(const sensor_msgs::PointCloud2ConstPtr& msg,
     health_.processed((ros::WallTime::now() - start).toSec());
   } catch (const std::exception& e) {
     health_.error("callback failure", std::string("cloud callback: ") + e.what());
-  }
-}
-
-void DriftMonitorRos::scanCallback(const sensor_msgs::LaserScanConstPtr& msg, bool target) {
-  try {
-    std::lock_guard<std::mutex> lock(callback_mutex_);
-    if (!due(target, msg->header.stamp)) return;
-    const ros::WallTime start = ros::WallTime::now();
-    std::string error;
-    if (!calibrationPoints(*msg, &work_points_, &error)) {
-      health_.error("unreadable scan", std::string(target ? "target" : "reference") +
-                                           " scan in frame '" + msg->header.frame_id + "': " + error);
-      return;
-    }
-    handOver(target, msg->header.frame_id, msg->header.stamp);
-    health_.processed((ros::WallTime::now() - start).toSec());
-  } catch (const std::exception& e) {
-    health_.error("callback failure", std::string("scan callback: ") + e.what());
   }
 }
 
@@ -297,7 +278,9 @@ void DriftMonitorRos::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat
     }
     status.add("check CPU [s]", last_.cpu_time);
   }
-  if (have_estimate_ && last_.level == cal::DriftLevel::kError) {
+  if (!config_error_.empty()) {
+    status.mergeSummary(diagnostic_msgs::DiagnosticStatus::ERROR, config_error_);
+  } else if (have_estimate_ && last_.level == cal::DriftLevel::kError) {
     status.mergeSummary(diagnostic_msgs::DiagnosticStatus::ERROR, "extrinsic drift: " + state_);
   } else if (have_estimate_ && last_.level == cal::DriftLevel::kWarn) {
     status.mergeSummary(diagnostic_msgs::DiagnosticStatus::WARN, "extrinsic drift: " + state_);

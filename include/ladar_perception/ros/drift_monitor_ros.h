@@ -1,5 +1,5 @@
-// ROS adapter of the drift monitor (nodelet ladar_perception/DriftMonitor): keeps a sliding
-// window of the reference and target scans (one every ~scan_interval seconds of their stamps,
+// ROS adapter of the drift monitor (nodelet ladar_perception/DriftMonitor), for 3D sensors
+// (PointCloud2: a lidar, a stereo camera): keeps a sliding window of the reference and target scans (one every ~scan_interval seconds of their stamps,
 // thinned, with the vehicle pose odom -> base_link from tf2), and every ~check_interval seconds
 // of scan time re-estimates the target's extrinsic against the reference
 // (calibration::DriftMonitor) and compares it with the configured one, base_frame -> target frame
@@ -22,7 +22,6 @@
 #include <thread>
 
 #include <ros/ros.h>
-#include <sensor_msgs/LaserScan.h>
 #include <sensor_msgs/PointCloud2.h>
 #include <tf2_ros/buffer.h>
 #include <tf2_ros/transform_listener.h>
@@ -48,7 +47,6 @@ class DriftMonitorRos {
   };
 
   void cloudCallback(const sensor_msgs::PointCloud2ConstPtr& msg, bool target);
-  void scanCallback(const sensor_msgs::LaserScanConstPtr& msg, bool target);
   // True when a scan at `stamp` is due (one per scan_interval per sensor).
   bool due(bool target, const ros::Time& stamp);
   void handOver(bool target, const std::string& frame, const ros::Time& stamp);
@@ -97,6 +95,7 @@ class DriftMonitorRos {
   bool have_estimate_ = false;
   int checks_ = 0, warn_checks_ = 0, error_checks_ = 0;
   std::string state_ = "waiting for scans and the extrinsics in tf";
+  std::string config_error_;  // an unsupported input type: the status is ERROR
 };
 
 }  // namespace ladar_perception
