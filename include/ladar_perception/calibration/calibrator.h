@@ -116,7 +116,8 @@ struct CalibrationParams {
   int sparse_level_extrapolation_steps = 2;
   // 3D targets: after the refinement the roles are swapped (the reference refined against the
   // target's surface at the solution) and the two estimates averaged. Each direction's error
-  // comes mostly from the noise of its own surface model.
+  // comes mostly from the noise of its own surface model. The observability is read at the
+  // one-way minimum.
   bool symmetric_refinement = true;
   double ground_z = 0.0;             // the ground's height in base_link [m]
   // 2D targets: hypotheses whose scan plane meets the ground within target_max_range at less than

@@ -363,6 +363,10 @@ CalibrationResult calibrateAttempt(const CalibrationInput& input,
     final_target = &level_thinned;
   }
   double swept_member_moved = 0;  // [m] in x and y, by the final refinement
+  // The refinement's own minimum, before a 3D target's two directions are averaged: the
+  // observability is read there (the mean is not a minimum of the cost the check reads, and
+  // along a direction the scene does not fix it could sit anywhere).
+  Pose6 one_way = estimate;
   if (!cancelled && (refine_only || params.method == "coarse_to_fine")) {
     RefinementParams rp = params.refinement;
     if (after_sweep) {
@@ -381,6 +385,7 @@ CalibrationResult calibrateAttempt(const CalibrationInput& input,
     out.evaluations += out.refinement.iterations;
     lin = out.refinement.at_solution;
     out.final_cost = lin.cost;
+    one_way = estimate;
     if (!cancelled && !sparse && params.symmetric_refinement) {
       const Pose6 swapped = swappedEstimate(input, params, estimate);
       estimate = applyStep(estimate, 0.5 * stepBetween(swapped, estimate));
@@ -403,7 +408,7 @@ CalibrationResult calibrateAttempt(const CalibrationInput& input,
   // is then read at the nearest minimum (a copy refined from the solution, the reported extrinsic
   // stays the method's), and a solution far from that minimum is reported as not converged
   // instead of blaming the scene.
-  Pose6 at = estimate;
+  Pose6 at = one_way;
   Pose6 to_minimum = Pose6::Zero();
   if (!cancelled && !(refine_only || params.method == "coarse_to_fine")) {
     RefinementParams rp = params.refinement;
