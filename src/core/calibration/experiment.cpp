@@ -91,6 +91,33 @@ bool simulateSensor(const sim::World& world, const SensorSetup& sensor,
   return true;
 }
 
+namespace {
+
+// A slalom along the world's standard drive (start to end): at distance s along it, the vehicle
+// is amplitude sin(2 pi s / wavelength) to the left, heading along the path (or against it when
+// driving back).
+struct Slalom {
+  Eigen::Vector2d start, along, left;
+  double length, heading, amplitude, k;
+  Slalom(const sim::World& world, double amplitude_m, double wavelength)
+      : amplitude(amplitude_m), k(2.0 * M_PI / wavelength) {
+    start = world.drivePose(0.0).translation().head<2>();
+    const Eigen::Vector2d end = world.drivePose(world.driveDuration()).translation().head<2>();
+    length = std::max((end - start).norm(), 1.0);
+    along = (end - start) / length;
+    left = Eigen::Vector2d(-along.y(), along.x());
+    heading = std::atan2(along.y(), along.x());
+  }
+  Eigen::Isometry3d pose(const sim::World& world, double s, bool back) const {
+    const Eigen::Vector2d p = start + s * along + amplitude * std::sin(k * s) * left;
+    const double slope = std::atan(amplitude * k * std::cos(k * s));
+    const double yaw = back ? wrapAngle(heading + M_PI - slope) : heading + slope;
+    return world.vehiclePose(p.x(), p.y(), yaw);
+  }
+};
+
+}  // namespace
+
 bool makeTrial(const sim::World& world, const PairSetup& pair, const ExperimentOptions& options,
                uint64_t seed, ExperimentTrial* out, std::string* error) {
   *out = ExperimentTrial();
@@ -105,18 +132,9 @@ bool makeTrial(const sim::World& world, const PairSetup& pair, const ExperimentO
       if (error) *error = "trajectory 'turns' needs a world with a standard drive and >= 2 poses";
       return false;
     }
-    const Eigen::Vector2d a = world.drivePose(0.0).translation().head<2>();
-    const Eigen::Vector2d b = world.drivePose(world.driveDuration()).translation().head<2>();
-    const double length = (b - a).norm();
-    const Eigen::Vector2d along = (b - a) / std::max(length, 1e-9);
-    const Eigen::Vector2d left(-along.y(), along.x());
-    const double heading = std::atan2(along.y(), along.x());
-    const double k = 2.0 * M_PI / options.turn_wavelength;
+    const Slalom slalom(world, options.turn_amplitude, options.turn_wavelength);
     for (int i = 0; i < options.poses; ++i) {
-      const double s = length * i / (options.poses - 1);  // distance along the drive
-      const Eigen::Vector2d p = a + s * along + options.turn_amplitude * std::sin(k * s) * left;
-      const double yaw = heading + std::atan(options.turn_amplitude * k * std::cos(k * s));
-      poses.push_back(world.vehiclePose(p.x(), p.y(), yaw));
+      poses.push_back(slalom.pose(world, slalom.length * i / (options.poses - 1), false));
     }
   } else if (options.trajectory != "thesis") {
     if (error) *error = "unknown trajectory '" + options.trajectory + "' (thesis, turns)";
@@ -187,21 +205,12 @@ bool makeTrial(const sim::World& world, const PairSetup& pair, const ExperimentO
 
 namespace {
 
-// Back and forth along the world's drive (start to end and back), weaving.
+// Back and forth along the world's drive, weaving +-1.5 m every 25 m.
 Eigen::Isometry3d driftDrivePose(const sim::World& world, double distance) {
-  const Eigen::Vector2d a = world.drivePose(0.0).translation().head<2>();
-  const Eigen::Vector2d b = world.drivePose(world.driveDuration()).translation().head<2>();
-  const double length = std::max((b - a).norm(), 1.0);
-  const Eigen::Vector2d along = (b - a) / length;
-  const Eigen::Vector2d left(-along.y(), along.x());
-  const double lap = std::fmod(distance, 2.0 * length);
-  const bool back = lap > length;
-  const double s = back ? 2.0 * length - lap : lap;  // position along the drive
-  const double k = 2.0 * M_PI / 25.0, amplitude = 1.5;
-  const Eigen::Vector2d p = a + s * along + amplitude * std::sin(k * s) * left;
-  const double slope = std::atan(amplitude * k * std::cos(k * s));
-  const double heading = std::atan2(along.y(), along.x()) + (back ? M_PI - slope : slope);
-  return world.vehiclePose(p.x(), p.y(), wrapAngle(heading));
+  const Slalom slalom(world, 1.5, 25.0);
+  const double lap = std::fmod(distance, 2.0 * slalom.length);
+  const bool back = lap > slalom.length;
+  return slalom.pose(world, back ? 2.0 * slalom.length - lap : lap, back);
 }
 
 }  // namespace
