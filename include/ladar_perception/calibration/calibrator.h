@@ -150,6 +150,9 @@ struct CalibrationResult {
   Pose6 stddev = Pose6::Zero();     // per DOF; infinity when unobservable
   double final_cost = 0;            // the method's own cost at the solution
   std::vector<std::string> unobservable;
+  // Not a success only because the DOFs in `unobservable` are not fixed by the data: the others
+  // are determined (a network's joint solution uses them).
+  bool partial = false;
   double elapsed = 0;               // seconds, wall clock
   double cpu_time = 0;              // seconds of this thread's CPU (the one-core figure)
   std::string method;

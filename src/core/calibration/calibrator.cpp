@@ -451,6 +451,7 @@ CalibrationResult calibrateAttempt(const CalibrationInput& input,
     msg << "too few correspondences between the clouds at the solution (" << lin.correspondences
         << "): do the sensors see the same surfaces?";
   } else if (!out.unobservable.empty()) {
+    out.partial = !member_unconverged;
     msg << "the scene cannot fix " << joinNames(out.unobservable)
         << " (cost curvature " << out.observability.relative_min
         << " of the strongest): their values are not determined by the data; the other DOFs are";
