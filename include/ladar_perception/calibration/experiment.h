@@ -11,6 +11,7 @@
 
 #include "ladar_perception/calibration/calibrator.h"
 #include "ladar_perception/calibration/drift_monitor.h"
+#include "ladar_perception/calibration/network.h"
 #include "ladar_perception/sim/sensor_models.h"
 #include "ladar_perception/sim/world.h"
 
@@ -84,6 +85,28 @@ struct ExperimentTrial {
 // Simulates one trial (deterministic in `seed`).
 bool makeTrial(const sim::World& world, const PairSetup& pair, const ExperimentOptions& options,
                uint64_t seed, ExperimentTrial* out, std::string* error);
+
+// A network of sensors (network.h): the reference and the targets, with their true mounts.
+struct NetworkSetup {
+  std::string name;
+  std::string reference_name;
+  SensorSetup reference;
+  std::vector<std::string> target_names;
+  std::vector<SensorSetup> targets;
+};
+// The thesis vehicle (sim::SensorRig::thesisVehicle, config/sensors.yaml): the HDL-64E as the
+// reference; the LMS-291 looking ahead, the one looking behind and the stereo camera as targets.
+NetworkSetup thesisVehicleNetwork();
+
+struct NetworkTrial {
+  NetworkInput input;        // each target's initial guess off by up to +-guess_offset
+  std::vector<Pose6> truth;  // per target
+};
+
+// Simulates one network trial along the trial's poses (deterministic in `seed`).
+bool makeNetworkTrial(const sim::World& world, const NetworkSetup& network,
+                      const ExperimentOptions& options, uint64_t seed, NetworkTrial* out,
+                      std::string* error);
 
 // One scan of a sensor at a vehicle pose, points in the sensor frame (the simulator's output
 // read back through PointCloudView, as a driver's cloud would be).

@@ -5,6 +5,7 @@
 
 #include "ladar_perception/sim/random.h"
 #include "ladar_perception/sim/scan_simulator.h"
+#include "ladar_perception/sim/sensor_rig.h"
 #include "ladar_perception/sim/trajectory.h"
 
 namespace ladar_perception {
@@ -118,15 +119,16 @@ struct Slalom {
 
 }  // namespace
 
-bool makeTrial(const sim::World& world, const PairSetup& pair, const ExperimentOptions& options,
-               uint64_t seed, ExperimentTrial* out, std::string* error) {
-  *out = ExperimentTrial();
+namespace {
+
+// The vehicle poses of a trial (options.trajectory).
+bool trialPoses(const sim::World& world, const ExperimentOptions& options, uint64_t seed,
+                std::vector<Eigen::Isometry3d>* poses, std::string* error) {
   sim::RandomPoseOptions pose_options;
   pose_options.max_offset = options.max_offset;
   pose_options.centre_x = options.centre_x;
   pose_options.centre_y = options.centre_y;
   pose_options.max_yaw = options.max_yaw;
-  std::vector<Eigen::Isometry3d> poses;
   if (options.trajectory == "turns") {
     if (world.driveDuration() <= 0.0 || options.poses < 2) {
       if (error) *error = "trajectory 'turns' needs a world with a standard drive and >= 2 poses";
@@ -134,7 +136,7 @@ bool makeTrial(const sim::World& world, const PairSetup& pair, const ExperimentO
     }
     const Slalom slalom(world, options.turn_amplitude, options.turn_wavelength);
     for (int i = 0; i < options.poses; ++i) {
-      poses.push_back(slalom.pose(world, slalom.length * i / (options.poses - 1), false));
+      poses->push_back(slalom.pose(world, slalom.length * i / (options.poses - 1), false));
     }
   } else if (options.trajectory != "thesis") {
     if (error) *error = "unknown trajectory '" + options.trajectory + "' (thesis, turns)";
@@ -145,18 +147,22 @@ bool makeTrial(const sim::World& world, const PairSetup& pair, const ExperimentO
       const double x = options.centre_x + pose_rng.uniform(-1.0, 1.0) * options.max_offset;
       const double y = options.centre_y + pose_rng.uniform(-1.0, 1.0) * options.max_lateral;
       const double yaw = pose_rng.uniform(-1.0, 1.0) * options.max_yaw;
-      poses.push_back(world.vehiclePose(x, y, yaw));
+      poses->push_back(world.vehiclePose(x, y, yaw));
     }
   } else {
-    poses = sim::randomVehiclePoses(world, options.poses, sim::mix64(seed ^ 0x905e5ULL),
-                                    pose_options);
+    *poses = sim::randomVehiclePoses(world, options.poses, sim::mix64(seed ^ 0x905e5ULL),
+                                     pose_options);
   }
-  out->vehicle_poses.assign(poses.begin(), poses.end());
-  out->truth = pair.target.extrinsic;
-  sim::Rng rng(sim::mix64(seed ^ 0x6e55ULL));
-  out->initial_guess = out->truth;
-  for (int i = 0; i < 6; ++i) out->initial_guess[i] += rng.uniform(-1.0, 1.0) * options.guess_offset[i];
-  out->input.reference_extrinsic = toIsometry(pair.reference.extrinsic);
+  return true;
+}
+
+// Simulates every sensor along the poses: per pose, each sensor in turn (the random stream
+// advances per scan in that order). A 2D ladar and the stereo camera keep their own rate along
+// the drive to the next pose; the Velodyne scans once at each pose (the thesis's set-up).
+bool simulateAlongPoses(const sim::World& world, const std::vector<const SensorSetup*>& sensors,
+                        const std::vector<Eigen::Isometry3d>& poses,
+                        const ExperimentOptions& options, uint64_t seed,
+                        const std::vector<ScanSet*>& sets, std::string* error) {
   PointVector points;
   uint64_t stream = sim::mix64(seed);
   const double sick_rate = sim::SickModel::lms291(options.noise).rate_hz;
@@ -167,11 +173,8 @@ bool makeTrial(const sim::World& world, const PairSetup& pair, const ExperimentO
     const double length =
         last ? 0.0 : (poses[k + 1].translation() - poses[k].translation()).head<2>().norm();
     const double duration = options.drive_speed > 0 ? length / options.drive_speed : 0.1;
-    for (int side = 0; side < 2; ++side) {
-      const SensorSetup& s = side == 0 ? pair.reference : pair.target;
-      ScanSet& set = side == 0 ? out->input.reference : out->input.target;
-      // The 2D ladar and the stereo camera keep their own rate along the drive; the Velodyne
-      // scans once at each pose (the thesis's set-up).
+    for (std::size_t side = 0; side < sensors.size(); ++side) {
+      const SensorSetup& s = *sensors[side];
       const bool sweep = s.kind == SensorKind::kSick ||
                          (s.kind == SensorKind::kStereo && options.stereo_while_driving);
       const double rate = s.kind == SensorKind::kSick ? sick_rate : stereo_rate;
@@ -195,12 +198,84 @@ bool makeTrial(const sim::World& world, const PairSetup& pair, const ExperimentO
         const sim::NoiseProfile noise =
             side == 0 && options.reference_noise_set ? options.reference_noise : options.noise;
         if (!simulateSensor(world, s, vehicle, noise, stream, &points, error)) return false;
-        set.addScan(segment_start + (sweep ? r / rate : 0.0), vehicle, points);
+        sets[side]->addScan(segment_start + (sweep ? r / rate : 0.0), vehicle, points);
       }
     }
     segment_start += duration;
   }
   return true;
+}
+
+// The initial guess: the truth off by up to +-guess_offset per axis.
+Pose6 initialGuess(const Pose6& truth, const ExperimentOptions& options, uint64_t stream) {
+  sim::Rng rng(stream);
+  Pose6 guess = truth;
+  for (int i = 0; i < 6; ++i) guess[i] += rng.uniform(-1.0, 1.0) * options.guess_offset[i];
+  return guess;
+}
+
+}  // namespace
+
+bool makeTrial(const sim::World& world, const PairSetup& pair, const ExperimentOptions& options,
+               uint64_t seed, ExperimentTrial* out, std::string* error) {
+  *out = ExperimentTrial();
+  std::vector<Eigen::Isometry3d> poses;
+  if (!trialPoses(world, options, seed, &poses, error)) return false;
+  out->vehicle_poses.assign(poses.begin(), poses.end());
+  out->truth = pair.target.extrinsic;
+  out->initial_guess = initialGuess(out->truth, options, sim::mix64(seed ^ 0x6e55ULL));
+  out->input.reference_extrinsic = toIsometry(pair.reference.extrinsic);
+  return simulateAlongPoses(world, {&pair.reference, &pair.target}, poses, options, seed,
+                            {&out->input.reference, &out->input.target}, error);
+}
+
+NetworkSetup thesisVehicleNetwork() {
+  NetworkSetup n;
+  n.name = "thesis-vehicle";
+  const sim::SensorRig rig = sim::SensorRig::thesisVehicle();
+  for (const sim::SensorMount& m : rig.sensors) {
+    // The vehicle's 3D ladar is the reference; its two LMS-291 looking ahead and behind and its
+    // stereo camera are the targets (the vertical LMS-291 sees the ground ahead only).
+    if (m.name == "sick_vertical") continue;
+    SensorSetup s;
+    s.kind = m.kind == sim::SensorKind::kVelodyne ? SensorKind::kVelodyne
+             : m.kind == sim::SensorKind::kSick   ? SensorKind::kSick
+                                                  : SensorKind::kStereo;
+    s.extrinsic = fromIsometry(m.base_to_sensor);
+    if (s.kind == SensorKind::kVelodyne && n.reference_name.empty()) {
+      n.reference_name = m.frame_id;
+      n.reference = s;
+    } else {
+      n.target_names.push_back(m.frame_id);
+      n.targets.push_back(s);
+    }
+  }
+  return n;
+}
+
+bool makeNetworkTrial(const sim::World& world, const NetworkSetup& network,
+                      const ExperimentOptions& options, uint64_t seed, NetworkTrial* out,
+                      std::string* error) {
+  *out = NetworkTrial();
+  std::vector<Eigen::Isometry3d> poses;
+  if (!trialPoses(world, options, seed, &poses, error)) return false;
+  out->input.reference_name = network.reference_name;
+  out->input.reference_extrinsic = toIsometry(network.reference.extrinsic);
+  out->input.targets.resize(network.targets.size());
+  std::vector<const SensorSetup*> sensors{&network.reference};
+  std::vector<ScanSet*> sets{&out->input.reference};
+  for (std::size_t t = 0; t < network.targets.size(); ++t) {
+    NetworkTarget& target = out->input.targets[t];
+    target.name = network.target_names[t];
+    out->truth.push_back(network.targets[t].extrinsic);
+    target.initial = initialGuess(network.targets[t].extrinsic, options,
+                                  sim::mix64(seed ^ (0x6e55ULL + 0x1000ULL * t)));
+    target.spread = options.guess_offset;
+    if (network.targets[t].kind == SensorKind::kStereo) target.surface_voxel = 0.4;
+    sensors.push_back(&network.targets[t]);
+    sets.push_back(&target.scans);
+  }
+  return simulateAlongPoses(world, sensors, poses, options, seed, sets, error);
 }
 
 namespace {
