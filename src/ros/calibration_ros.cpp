@@ -81,10 +81,53 @@ CalibrationRos::CalibrationRos(ros::NodeHandle nh, ros::NodeHandle private_nh)
   min_range_ = private_nh_.param("min_range", 0.5);
   max_range_ = private_nh_.param("max_range", 120.0);
   tf_wait_ = private_nh_.param("tf_wait", 2.0);
+  network_output_file_ = private_nh_.param<std::string>("network_output_file", "");
+  sensors_.resize(1);
+  sensors_[0].role = "reference";
+  sensors_[0].topic = "reference";
   sensors_[0].type = private_nh_.param<std::string>("reference_type", "PointCloud2");
-  sensors_[1].type = private_nh_.param<std::string>("target_type", "PointCloud2");
   sensors_[0].frame = private_nh_.param<std::string>("reference_frame", "");
-  sensors_[1].frame = private_nh_.param<std::string>("target_frame", "");
+  sensors_[0].voxel = buffer_voxel_;
+  // Several targets: ~target_topics (and ~target_types, one per topic or one for all); else the
+  // one on `target`.
+  std::vector<std::string> topics, types;
+  private_nh_.getParam("target_topics", topics);
+  private_nh_.getParam("target_types", types);
+  private_nh_.getParam("target_surface_voxels", target_surface_voxels_);
+  // Per-target thinning of each buffered scan (~target_buffer_voxels, else ~buffer_voxel): a
+  // stereo camera's frames want a fine one (their dense, accurate near returns are otherwise
+  // merged while the noisy far ones stay; 0.1 m left the camera 12 cm off).
+  std::vector<double> target_voxels, target_intervals;
+  private_nh_.getParam("target_buffer_voxels", target_voxels);
+  // At most one scan per interval is buffered (~buffer_interval, ~target_buffer_intervals): a
+  // Velodyne's buffer then spans the drive instead of its last seconds.
+  private_nh_.getParam("target_buffer_intervals", target_intervals);
+  const double interval = private_nh_.param("buffer_interval", 0.0);
+  sensors_[0].interval = interval;
+  const std::string target_type = private_nh_.param<std::string>("target_type", "PointCloud2");
+  if (topics.empty()) {
+    Sensor t;
+    t.role = "target";
+    t.topic = "target";
+    t.type = target_type;
+    t.frame = private_nh_.param<std::string>("target_frame", "");
+    t.voxel = target_voxels.empty() ? buffer_voxel_ : target_voxels[0];
+    t.interval = target_intervals.empty() ? interval : target_intervals[0];
+    sensors_.push_back(std::move(t));
+  }
+  for (std::size_t k = 0; k < topics.size(); ++k) {
+    Sensor t;
+    t.role = "target " + topics[k];
+    t.topic = topics[k];
+    t.type = types.size() == topics.size() ? types[k] : (types.size() == 1 ? types[0] : target_type);
+    t.voxel = k < target_voxels.size() ? target_voxels[k] : buffer_voxel_;
+    t.interval = k < target_intervals.size() ? target_intervals[k] : interval;
+    sensors_.push_back(std::move(t));
+  }
+  if (!types.empty() && types.size() != 1 && types.size() != topics.size()) {
+    ROS_ERROR_STREAM("Calibration: ~target_types has " << types.size() << " entries for "
+                     << topics.size() << " ~target_topics (one per topic, or one for all); using ~target_type");
+  }
   for (Sensor& s : sensors_) {
     s.ring.reset(new cal::ScanRing(static_cast<std::size_t>(buffer_size_),
                                    static_cast<std::size_t>(4 * buffer_size_),
@@ -105,6 +148,8 @@ CalibrationRos::CalibrationRos(ros::NodeHandle nh, ros::NodeHandle private_nh)
 
   service_nh_.setCallbackQueue(&service_queue_);
   calibrate_srv_ = service_nh_.advertiseService("calibrate", &CalibrationRos::calibrateService, this);
+  network_srv_ = service_nh_.advertiseService("calibrate_network",
+                                              &CalibrationRos::calibrateNetworkService, this);
   reset_srv_ = service_nh_.advertiseService("reset", &CalibrationRos::resetService, this);
   save_srv_ = service_nh_.advertiseService("save", &CalibrationRos::saveService, this);
   // Two threads: one may wait on a running calibration while the other answers "busy".
@@ -117,22 +162,19 @@ CalibrationRos::CalibrationRos(ros::NodeHandle nh, ros::NodeHandle private_nh)
 
   drain_timer_ = nh_.createTimer(ros::Duration(0.05), &CalibrationRos::drainPending, this);
   const int queue = private_nh_.param("queue_size", 20);
-  for (int s = 0; s < 2; ++s) {
-    const bool target = s == 1;
-    const std::string topic = target ? "target" : "reference";
+  for (std::size_t s = 0; s < sensors_.size(); ++s) {
+    const std::string& topic = sensors_[s].topic;
     if (sensors_[s].type == "LaserScan") {
       sensors_[s].subscriber = nh_.subscribe<sensor_msgs::LaserScan>(
-          topic, queue,
-          [this, target](const sensor_msgs::LaserScanConstPtr& m) { scanCallback(m, target); });
+          topic, queue, [this, s](const sensor_msgs::LaserScanConstPtr& m) { scanCallback(m, s); });
     } else {
       if (sensors_[s].type != "PointCloud2") {
-        ROS_ERROR_STREAM("Calibration: ~" << topic << "_type must be PointCloud2 or LaserScan, not '"
-                         << sensors_[s].type << "'; using PointCloud2");
+        ROS_ERROR_STREAM("Calibration: the " << sensors_[s].role << "'s type must be PointCloud2 or "
+                         "LaserScan, not '" << sensors_[s].type << "'; using PointCloud2");
         sensors_[s].type = "PointCloud2";
       }
       sensors_[s].subscriber = nh_.subscribe<sensor_msgs::PointCloud2>(
-          topic, queue,
-          [this, target](const sensor_msgs::PointCloud2ConstPtr& m) { cloudCallback(m, target); });
+          topic, queue, [this, s](const sensor_msgs::PointCloud2ConstPtr& m) { cloudCallback(m, s); });
     }
   }
 }
@@ -144,6 +186,7 @@ CalibrationRos::~CalibrationRos() {
   diagnostics_.reset();
   if (service_spinner_) service_spinner_->stop();
   calibrate_srv_.shutdown();
+  network_srv_.shutdown();
   reset_srv_.shutdown();
   save_srv_.shutdown();
 }
@@ -153,7 +196,7 @@ std::size_t CalibrationRos::bufferedScans(bool target) const {
   return sensors_[target ? 1 : 0].ring->posedScans();
 }
 
-void CalibrationRos::cloudCallback(const sensor_msgs::PointCloud2ConstPtr& msg, bool target) {
+void CalibrationRos::cloudCallback(const sensor_msgs::PointCloud2ConstPtr& msg, std::size_t sensor) {
   try {
     const ros::WallTime start = ros::WallTime::now();
     std::lock_guard<std::mutex> work(work_mutex_);
@@ -161,11 +204,11 @@ void CalibrationRos::cloudCallback(const sensor_msgs::PointCloud2ConstPtr& msg, 
     CloudError code = CloudError::kNone;
     if (!calibrationPoints(*msg, min_range_, max_range_, &work_points_, &error, &code)) {
       health_.error(std::string("unreadable cloud (") + cloudErrorName(code) + ")",
-                    std::string(target ? "target" : "reference") + " cloud in frame '" +
-                        msg->header.frame_id + "': " + error);
+                    sensors_[sensor].role + " cloud in frame '" + msg->header.frame_id +
+                        "': " + error);
       return;
     }
-    if (enqueue(target, msg->header.frame_id, msg->header.stamp)) {
+    if (enqueue(sensor, msg->header.frame_id, msg->header.stamp)) {
       health_.processed((ros::WallTime::now() - start).toSec());  // conversion + thinning
     }
   } catch (const std::exception& e) {
@@ -173,17 +216,17 @@ void CalibrationRos::cloudCallback(const sensor_msgs::PointCloud2ConstPtr& msg, 
   }
 }
 
-void CalibrationRos::scanCallback(const sensor_msgs::LaserScanConstPtr& msg, bool target) {
+void CalibrationRos::scanCallback(const sensor_msgs::LaserScanConstPtr& msg, std::size_t sensor) {
   try {
     const ros::WallTime start = ros::WallTime::now();
     std::lock_guard<std::mutex> work(work_mutex_);
     std::string error;
     if (!calibrationPoints(*msg, &work_points_, &error)) {
-      health_.error("unreadable scan", std::string(target ? "target" : "reference") +
-                                           " scan in frame '" + msg->header.frame_id + "': " + error);
+      health_.error("unreadable scan", sensors_[sensor].role + " scan in frame '" +
+                                           msg->header.frame_id + "': " + error);
       return;
     }
-    if (enqueue(target, msg->header.frame_id, msg->header.stamp)) {
+    if (enqueue(sensor, msg->header.frame_id, msg->header.stamp)) {
       health_.processed((ros::WallTime::now() - start).toSec());  // conversion + thinning
     }
   } catch (const std::exception& e) {
@@ -197,21 +240,26 @@ namespace {
 constexpr std::size_t kRetainedWorkPoints = 1 << 19;
 }  // namespace
 
-bool CalibrationRos::enqueue(bool target, const std::string& frame, const ros::Time& stamp) {
-  Sensor& s = sensors_[target ? 1 : 0];
-  const char* role = target ? "target" : "reference";
+bool CalibrationRos::enqueue(std::size_t sensor, const std::string& frame, const ros::Time& stamp) {
+  Sensor& s = sensors_[sensor];
+  const std::string& role = s.role;
+
   {
     std::lock_guard<std::mutex> lock(mutex_);
     if (s.frame.empty()) s.frame = frame;
     if (frame != s.frame) {
-      health_.error("unexpected frame", std::string(role) + " message in frame '" + frame +
+      health_.error("unexpected frame", role + " message in frame '" + frame +
                                             "', expected '" + s.frame + "'; ignored");
       return false;
     }
   }
+  if (s.interval > 0 && !s.last_kept.isZero() && stamp >= s.last_kept &&
+      (stamp - s.last_kept).toSec() < s.interval) {
+    return false;  // within the buffer interval of the last kept scan: not needed
+  }
   thinned_.clear();
-  if (buffer_voxel_ > 0) {
-    thinner_.thin(work_points_.data(), work_points_.size(), buffer_voxel_, &thinned_);
+  if (s.voxel > 0) {
+    thinner_.thin(work_points_.data(), work_points_.size(), s.voxel, &thinned_);
   } else {
     thinned_.assign(work_points_.begin(), work_points_.end());
   }
@@ -226,8 +274,9 @@ bool CalibrationRos::enqueue(bool target, const std::string& frame, const ros::T
     cal::PointVector().swap(thinned_);
     thinner_ = cal::VoxelThinner();
   }
+  if (outcome.stored) s.last_kept = stamp;
   if (!outcome.stored) {
-    health_.error("scan too large", std::string(role) + " scan of " + std::to_string(thinned) +
+    health_.error("scan too large", role + " scan of " + std::to_string(thinned) +
                                         " points after thinning; the buffer holds " +
                                         std::to_string(buffer_points_) + " (~buffer_points)");
     return false;
@@ -247,8 +296,7 @@ void CalibrationRos::drainPending(const ros::TimerEvent&) {
   try {
     std::lock_guard<std::mutex> lock(mutex_);
     const ros::Time now = ros::Time::now();
-    for (int k = 0; k < 2; ++k) {
-      Sensor& s = sensors_[k];
+    for (Sensor& s : sensors_) {
       int64_t stamp_ns = 0;
       while (s.ring->oldestWaiting(&stamp_ns)) {
         ros::Time stamp;
@@ -263,7 +311,7 @@ void CalibrationRos::drainPending(const ros::TimerEvent&) {
         // tf has cleared its buffer and that pose will not come).
         if ((now - stamp).toSec() > tf_wait_ || (stamp - now).toSec() > tf_wait_) {
           health_.tfLookupFailed("no vehicle pose " + odom_frame_ + " -> " +
-                                 base_frame_ + " at a " + (k ? "target" : "reference") +
+                                 base_frame_ + " at a " + s.role +
                                  " scan's stamp within " + std::to_string(tf_wait_) +
                                  " s; scan dropped (" + why + ")");
           s.ring->dropWaiting();
@@ -280,8 +328,9 @@ void CalibrationRos::drainPending(const ros::TimerEvent&) {
 void CalibrationRos::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) {
   health_.fillDiagnostics(status);
   std::lock_guard<std::mutex> lock(mutex_);
-  for (int k = 0; k < 2; ++k) {
-    const std::string role = k ? "target" : "reference";
+  for (const Sensor& sensor : sensors_) {
+    const std::string& role = sensor.role;
+    const std::size_t k = &sensor - sensors_.data();
     status.add(role + " frame", sensors_[k].frame.empty() ? std::string("(none yet)") : sensors_[k].frame);
     status.add(role + " scans buffered", sensors_[k].ring->posedScans());
     status.add(role + " scans waiting for a pose", sensors_[k].ring->waitingScans());
@@ -293,7 +342,7 @@ void CalibrationRos::diagnose(diagnostic_updater::DiagnosticStatusWrapper& statu
   if (have_result_) status.add("last final cost", last_result_.final_cost);
 }
 
-bool CalibrationRos::publishProgress(const cal::SearchProgress& p) {
+bool CalibrationRos::publishProgress(const cal::SearchProgress& p, const std::string& child) {
   const int n = ++progress_iteration_;
   std_msgs::String line;
   std::ostringstream s;
@@ -307,7 +356,7 @@ bool CalibrationRos::publishProgress(const cal::SearchProgress& p) {
   est.header.frame_id = base_frame_;
   {
     std::lock_guard<std::mutex> lock(mutex_);
-    est.child_frame_id = sensors_[1].frame;
+    est.child_frame_id = child.empty() ? sensors_[1].frame : child;
   }
   progress_estimate_pub_.publish(est);
   return !shutting_down_ && ros::ok();
@@ -343,6 +392,39 @@ bool CalibrationRos::calibrateService(ladar_perception::Calibrate::Request& req,
   return true;
 }
 
+bool CalibrationRos::requestParams(const std::string& method, const std::vector<double>& spread,
+                                   cal::CalibrationParams* params, std::string* error) const {
+  params->method = method.empty() ? private_nh_.param<std::string>("method", cal::defaultMethod())
+                                  : method;
+  if (!cal::isMethod(params->method)) {
+    std::string names;
+    for (const std::string& m : cal::methodNames()) names += " " + m;
+    *error = "unknown method '" + params->method + "' (methods:" + names + ")";
+    return false;
+  }
+  if (params->method == "particle_filter") {
+    const cal::CalibrationParams thesis = cal::thesisParticleFilterParams();
+    params->search = thesis.search;
+  }
+  params->bin_size = private_nh_.param("bin_size", params->bin_size);
+  params->trim_fraction = private_nh_.param("trim_fraction", params->trim_fraction);
+  params->refinement.reference_voxel =
+      std::max(0.05, private_nh_.param("surface_voxel", params->refinement.reference_voxel));
+  if (!readPose6(private_nh_, "spread", params->spread, &params->spread) ||
+      !readPose6(private_nh_, "initial_guess", params->initial, &params->initial)) {
+    *error = "~initial_guess and ~spread must be lists of 6 numbers (x y z roll pitch yaw)";
+    return false;
+  }
+  if (!spread.empty()) {
+    if (spread.size() != 6) {
+      *error = "spread must have 6 values (x y z roll pitch yaw) or none";
+      return false;
+    }
+    for (int i = 0; i < 6; ++i) params->spread[i] = spread[i];
+  }
+  return true;
+}
+
 void CalibrationRos::runCalibration(const ladar_perception::Calibrate::Request& req,
                                     ladar_perception::Calibrate::Response& res) {
   const auto fail = [&res](const std::string& why) {
@@ -350,25 +432,8 @@ void CalibrationRos::runCalibration(const ladar_perception::Calibrate::Request& 
     res.message = why;
   };
   cal::CalibrationParams params;
-  params.method = req.method.empty() ? private_nh_.param<std::string>("method", cal::defaultMethod())
-                                     : req.method;
-  if (!cal::isMethod(params.method)) {
-    std::string names;
-    for (const std::string& m : cal::methodNames()) names += " " + m;
-    return fail("unknown method '" + params.method + "' (methods:" + names + ")");
-  }
-  if (params.method == "particle_filter") {
-    const cal::CalibrationParams thesis = cal::thesisParticleFilterParams();
-    params.search = thesis.search;
-  }
-  params.bin_size = private_nh_.param("bin_size", params.bin_size);
-  params.trim_fraction = private_nh_.param("trim_fraction", params.trim_fraction);
-  params.refinement.reference_voxel =
-      std::max(0.05, private_nh_.param("surface_voxel", params.refinement.reference_voxel));
-  if (!readPose6(private_nh_, "spread", params.spread, &params.spread) ||
-      !readPose6(private_nh_, "initial_guess", params.initial, &params.initial)) {
-    return fail("~initial_guess and ~spread must be lists of 6 numbers (x y z roll pitch yaw)");
-  }
+  std::string why;
+  if (!requestParams(req.method, req.spread, &params, &why)) return fail(why);
   const geometry_msgs::Transform& g = req.initial_guess;
   const bool guess_given = g.translation.x != 0 || g.translation.y != 0 || g.translation.z != 0 ||
                            g.rotation.x != 0 || g.rotation.y != 0 || g.rotation.z != 0 ||
@@ -381,10 +446,6 @@ void CalibrationRos::runCalibration(const ladar_perception::Calibrate::Request& 
     t.translation() << g.translation.x, g.translation.y, g.translation.z;
     params.initial = cal::fromIsometry(t);
   }
-  if (!req.spread.empty()) {
-    if (req.spread.size() != 6) return fail("spread must have 6 values (x y z roll pitch yaw) or none");
-    for (int i = 0; i < 6; ++i) params.spread[i] = req.spread[i];
-  }
 
   // Snapshot of the buffers (the subscribers keep filling them meanwhile).
   cal::CalibrationInput input;
@@ -393,10 +454,8 @@ void CalibrationRos::runCalibration(const ladar_perception::Calibrate::Request& 
     std::lock_guard<std::mutex> lock(mutex_);
     reference_frame = sensors_[0].frame;
     target_frame = sensors_[1].frame;
-    for (int k = 0; k < 2; ++k) {
-      cal::ScanSet& set = k == 0 ? input.reference : input.target;
-      sensors_[k].ring->appendPosedTo(&set);
-    }
+    sensors_[0].ring->appendPosedTo(&input.reference);
+    sensors_[1].ring->appendPosedTo(&input.target);
   }
   if (input.reference.empty() || input.target.empty()) {
     return fail("no data: " + std::to_string(input.reference.numScans()) + " reference and " +
@@ -453,12 +512,161 @@ void CalibrationRos::runCalibration(const ladar_perception::Calibrate::Request& 
                   << res.message);
 }
 
+std::string CalibrationRos::networkOutputPath() const {
+  if (!network_output_file_.empty()) return network_output_file_;
+  const char* ros_home = std::getenv("ROS_HOME");
+  const char* home = std::getenv("HOME");
+  const std::string dir = ros_home ? ros_home : (home ? std::string(home) + "/.ros" : "/tmp");
+  return dir + "/ladar_calibration_network.yaml";
+}
+
+bool CalibrationRos::calibrateNetworkService(ladar_perception::CalibrateNetwork::Request& req,
+                                             ladar_perception::CalibrateNetwork::Response& res) {
+  if (busy_.exchange(true)) {
+    res.success = false;
+    res.message = "busy: a calibration is running (progress iteration " +
+                  std::to_string(progress_iteration_.load()) + "); try again when it answers";
+    return true;
+  }
+  try {
+    runNetwork(req, res);
+  } catch (const std::exception& e) {
+    res.success = false;
+    res.message = std::string("network calibration failed: ") + e.what();
+  }
+  busy_ = false;
+  return true;
+}
+
+void CalibrationRos::runNetwork(const ladar_perception::CalibrateNetwork::Request& req,
+                                ladar_perception::CalibrateNetwork::Response& res) {
+  const auto fail = [&res](const std::string& why) {
+    res.success = false;
+    res.message = why;
+  };
+  cal::NetworkParams params;
+  std::string why;
+  if (!requestParams(req.method, req.spread, &params.calibration, &why)) return fail(why);
+  params.cross_pairs = !req.reference_only;
+
+  // Snapshot of the buffers (the subscribers keep filling them meanwhile).
+  cal::NetworkInput input;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    input.reference_name = sensors_[0].frame;
+    sensors_[0].ring->appendPosedTo(&input.reference);
+    for (std::size_t k = 1; k < sensors_.size(); ++k) {
+      cal::NetworkTarget t;
+      t.name = sensors_[k].frame;
+      if (k - 1 < target_surface_voxels_.size()) t.surface_voxel = target_surface_voxels_[k - 1];
+      sensors_[k].ring->appendPosedTo(&t.scans);
+      input.targets.push_back(std::move(t));
+    }
+  }
+  std::string empty;
+  if (input.reference.empty()) empty += " the reference";
+  for (const cal::NetworkTarget& t : input.targets) {
+    if (t.scans.empty() || t.name.empty()) empty += " " + (t.name.empty() ? std::string("a target") : t.name);
+  }
+  if (!empty.empty()) {
+    return fail("no data from" + empty + ": drive the vehicle with every sensor publishing and tf " +
+                odom_frame_ + " -> " + base_frame_ + " available");
+  }
+  try {
+    input.reference_extrinsic = tf2::transformToEigen(
+        tf_buffer_.lookupTransform(base_frame_, input.reference_name, ros::Time(0)));
+  } catch (const tf2::TransformException& e) {
+    return fail("the reference's extrinsic " + base_frame_ + " -> " + input.reference_name +
+                " is not in tf: " + e.what());
+  }
+  // Each target's initial guess: ~initial_guesses/<frame> (6 numbers), else its mount in tf (an
+  // existing, uncertain calibration), else ~initial_guess. The spread is the request's or ~spread.
+  for (cal::NetworkTarget& t : input.targets) {
+    t.spread = params.calibration.spread;
+    t.initial = params.calibration.initial;
+    const std::string key = "initial_guesses/" + cal::networkKey(t.name);
+    if (private_nh_.hasParam(key)) {
+      if (!readPose6(private_nh_, key, t.initial, &t.initial)) {
+        return fail("~" + key + " must be a list of 6 numbers (x y z roll pitch yaw)");
+      }
+    } else {
+      try {
+        t.initial = cal::fromIsometry(
+            tf2::transformToEigen(tf_buffer_.lookupTransform(base_frame_, t.name, ros::Time(0))));
+      } catch (const tf2::TransformException&) {
+      }
+    }
+  }
+
+  progress_iteration_ = 0;
+  auto future = std::async(std::launch::async, [&]() {
+    return cal::calibrateNetwork(input, params, [this](const std::string& edge,
+                                                       const cal::SearchProgress& p) {
+      cal::SearchProgress q = p;
+      q.stage = edge + ": " + p.stage;
+      return publishProgress(q, edge.substr(0, edge.find(" <- ")));
+    });
+  });
+  const cal::NetworkResult result = future.get();
+
+  res.success = result.success;
+  res.message = result.message;
+  res.elapsed = result.elapsed;
+  const ros::Time now = ros::Time::now();
+  const auto stamped = [&](const cal::Pose6& pose, const std::string& child) {
+    geometry_msgs::TransformStamped t = tf2::eigenToTransform(cal::toIsometry(pose));
+    t.header.stamp = now;
+    t.header.frame_id = base_frame_;
+    t.child_frame_id = child;
+    return t;
+  };
+  for (const cal::NetworkSensorResult& s : result.sensors) {
+    res.transforms.push_back(stamped(s.joint, s.name));
+    res.pairwise.push_back(stamped(s.pairwise, s.name));
+    res.stddev.insert(res.stddev.end(), s.stddev.data(), s.stddev.data() + 6);
+    for (const std::string& u : s.unobservable) res.unobservable.push_back(s.name + ": " + u);
+  }
+  for (const cal::NetworkEdge& e : result.edges) {
+    res.edges.push_back(result.sensors[e.to].name + " <- " +
+                        (e.from < 0 ? std::string("reference") : result.sensors[e.from].name));
+    res.edge_used.push_back(e.used);
+    res.loop_translation.push_back(e.loop_translation);
+    res.loop_rotation.push_back(e.loop_rotation);
+    res.residual_translation.push_back(e.residual_translation);
+    res.residual_rotation.push_back(e.residual_rotation);
+  }
+  const std::string path = networkOutputPath();
+  std::string launch_path = path;
+  const std::size_t dot = launch_path.rfind(".yaml");
+  if (dot != std::string::npos && dot + 5 == launch_path.size()) launch_path.erase(dot);
+  launch_path += ".launch";
+  if (result.success) {
+    std::string error;
+    if (cal::backupExistingFile(path, nullptr, &error) &&
+        cal::writeFileAtomically(path, cal::networkYaml(base_frame_, result), &error) &&
+        cal::backupExistingFile(launch_path, nullptr, &error) &&
+        cal::writeFileAtomically(launch_path, cal::networkLaunch(path, result), &error)) {
+      res.output_file = path;
+      res.launch_file = launch_path;
+      res.message += "; written to " + path + " and " + launch_path;
+    } else {
+      res.message += "; NOT written: " + error;
+    }
+  } else {
+    res.message += "; not written";
+  }
+  ROS_INFO_STREAM("Calibration: network " << (result.success ? "calibrated" : "not calibrated")
+                  << " in " << result.elapsed << " s: " << res.message);
+}
+
 bool CalibrationRos::resetService(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res) {
+  std::lock_guard<std::mutex> work(work_mutex_);  // the callbacks' order: work_mutex_, then mutex_
   std::lock_guard<std::mutex> lock(mutex_);
   std::size_t n = 0;
   for (Sensor& s : sensors_) {
     n += s.ring->posedScans() + s.ring->waitingScans();
     s.ring->clear();
+    s.last_kept = ros::Time();
   }
   have_result_ = false;
   res.success = true;
