@@ -1,5 +1,6 @@
 #include "ladar_perception/ros/calibration_ros.h"
 
+#include <atomic>
 #include <cmath>
 #include <cstdlib>
 #include <future>
@@ -374,22 +375,35 @@ std::string CalibrationRos::outputPath() const {
   return dir + "/ladar_calibration_" + child + ".yaml";
 }
 
-bool CalibrationRos::calibrateService(ladar_perception::Calibrate::Request& req,
-                                      ladar_perception::Calibrate::Response& res) {
-  if (busy_.exchange(true)) {
+namespace {
+
+// One calibration at a time: a request while one runs is answered busy at once; an exception
+// becomes the answer's message (it must never leave a service callback).
+template <typename Response, typename Run>
+bool serveOneAtATime(std::atomic<bool>& busy, const std::atomic<int>& iteration,
+                     const char* what, Response& res, Run run) {
+  if (busy.exchange(true)) {
     res.success = false;
     res.message = "busy: a calibration is running (progress iteration " +
-                  std::to_string(progress_iteration_.load()) + "); try again when it answers";
+                  std::to_string(iteration.load()) + "); try again when it answers";
     return true;
   }
   try {
-    runCalibration(req, res);
+    run();
   } catch (const std::exception& e) {
     res.success = false;
-    res.message = std::string("calibration failed: ") + e.what();
+    res.message = std::string(what) + " failed: " + e.what();
   }
-  busy_ = false;
+  busy = false;
   return true;
+}
+
+}  // namespace
+
+bool CalibrationRos::calibrateService(ladar_perception::Calibrate::Request& req,
+                                      ladar_perception::Calibrate::Response& res) {
+  return serveOneAtATime(busy_, progress_iteration_, "calibration", res,
+                         [&] { runCalibration(req, res); });
 }
 
 bool CalibrationRos::requestParams(const std::string& method, const std::vector<double>& spread,
@@ -522,20 +536,8 @@ std::string CalibrationRos::networkOutputPath() const {
 
 bool CalibrationRos::calibrateNetworkService(ladar_perception::CalibrateNetwork::Request& req,
                                              ladar_perception::CalibrateNetwork::Response& res) {
-  if (busy_.exchange(true)) {
-    res.success = false;
-    res.message = "busy: a calibration is running (progress iteration " +
-                  std::to_string(progress_iteration_.load()) + "); try again when it answers";
-    return true;
-  }
-  try {
-    runNetwork(req, res);
-  } catch (const std::exception& e) {
-    res.success = false;
-    res.message = std::string("network calibration failed: ") + e.what();
-  }
-  busy_ = false;
-  return true;
+  return serveOneAtATime(busy_, progress_iteration_, "network calibration", res,
+                         [&] { runNetwork(req, res); });
 }
 
 void CalibrationRos::runNetwork(const ladar_perception::CalibrateNetwork::Request& req,

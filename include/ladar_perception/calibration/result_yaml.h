@@ -11,6 +11,17 @@
 namespace ladar_perception {
 namespace calibration {
 
+// The TransformStamped dict alone (header.frame_id, child_frame_id, transform), every line
+// prefixed by `indent` (a network's YAML nests one per sensor under its key).
+std::string transformStampedYaml(const std::string& parent_frame, const std::string& child_frame,
+                                 const Pose6& extrinsic, const std::string& indent = "");
+// Pieces of the YAML text: a number that XmlRpc reads as a double (always with a decimal
+// point); a figure for a comment ("unobservable" when not finite); text for a comment or a
+// quoted string (no line breaks, no quotes).
+std::string yamlNumber(double v);
+std::string yamlFigure(double v, int significant_digits = 6);
+std::string yamlText(const std::string& s);
+
 // The YAML text. Figures that are not part of the transform (stddev, cost, unobservable DOFs,
 // method) go into comments so that the parameter stays exactly a TransformStamped.
 std::string staticTransformYaml(const std::string& parent_frame, const std::string& child_frame,

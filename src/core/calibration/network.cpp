@@ -55,25 +55,6 @@ Pose6 edgeWeights(const NetworkEdge& e, const NetworkParams& params) {
   return w;
 }
 
-std::string sanitize(const std::string& s) {
-  std::string out;
-  for (char c : s) out += (c == '\n' || c == '\r' || c == '"') ? ' ' : c;
-  return out;
-}
-
-std::string num(double v) {
-  char buf[64];
-  std::snprintf(buf, sizeof(buf), "%.9f", v);
-  return buf;
-}
-
-std::string fig(double v) {
-  if (!std::isfinite(v)) return "unobservable";
-  char buf[64];
-  std::snprintf(buf, sizeof(buf), "%.4g", v);
-  return buf;
-}
-
 }  // namespace
 
 std::string networkKey(const std::string& frame) {
@@ -338,34 +319,30 @@ NetworkResult calibrateNetwork(const NetworkInput& input, const NetworkParams& p
 std::string networkYaml(const std::string& parent_frame, const NetworkResult& r) {
   std::ostringstream y;
   y << "# ladar_perception calibration of a sensor network against its reference\n";
-  y << "# success: " << (r.success ? "true" : "false") << "; " << sanitize(r.message) << "\n";
+  y << "# success: " << (r.success ? "true" : "false") << "; " << yamlText(r.message) << "\n";
   y << "# edges (to <- from: pairwise or cross estimate; loop closure and joint residual as\n"
        "# translation [m] / rotation [rad]):\n";
   for (const NetworkEdge& e : r.edges) {
     const std::string from = e.from < 0 ? "reference" : r.sensors[e.from].name;
-    y << "#   " << sanitize(r.sensors[e.to].name) << " <- " << sanitize(from) << ": "
+    y << "#   " << yamlText(r.sensors[e.to].name) << " <- " << yamlText(from) << ": "
       << (e.result.success ? "success" : (e.used ? "partial" : "not used"));
-    if (e.from >= 0) y << ", loop " << fig(e.loop_translation) << " / " << fig(e.loop_rotation);
-    y << ", residual " << fig(e.residual_translation) << " / " << fig(e.residual_rotation) << "\n";
+    if (e.from >= 0) {
+      y << ", loop " << yamlFigure(e.loop_translation, 4) << " / "
+        << yamlFigure(e.loop_rotation, 4);
+    }
+    y << ", residual " << yamlFigure(e.residual_translation, 4) << " / "
+      << yamlFigure(e.residual_rotation, 4) << "\n";
   }
   for (const NetworkSensorResult& s : r.sensors) {
-    const Eigen::Isometry3d t = toIsometry(s.joint);
-    const Eigen::Quaterniond q(t.linear());
-    y << "\n# " << sanitize(s.name) << ": " << (s.success ? "calibrated" : "NOT calibrated")
+    y << "\n# " << yamlText(s.name) << ": " << (s.success ? "calibrated" : "NOT calibrated")
       << "; x y z roll pitch yaw:";
-    for (int k = 0; k < 6; ++k) y << " " << num(s.joint[k]);
+    for (int k = 0; k < 6; ++k) y << " " << yamlNumber(s.joint[k]);
     y << "\n# stddev:";
-    for (int k = 0; k < 6; ++k) y << " " << fig(s.stddev[k]);
+    for (int k = 0; k < 6; ++k) y << " " << yamlFigure(s.stddev[k], 4);
     y << "; pairwise estimate:";
-    for (int k = 0; k < 6; ++k) y << " " << num(s.pairwise[k]);
+    for (int k = 0; k < 6; ++k) y << " " << yamlNumber(s.pairwise[k]);
     y << "\n" << networkKey(s.name) << ":\n";
-    y << "  header:\n    frame_id: \"" << sanitize(parent_frame) << "\"\n";
-    y << "  child_frame_id: \"" << sanitize(s.name) << "\"\n";
-    y << "  transform:\n";
-    y << "    translation: {x: " << num(t.translation().x()) << ", y: " << num(t.translation().y())
-      << ", z: " << num(t.translation().z()) << "}\n";
-    y << "    rotation: {x: " << num(q.x()) << ", y: " << num(q.y()) << ", z: " << num(q.z())
-      << ", w: " << num(q.w()) << "}\n";
+    y << transformStampedYaml(parent_frame, s.name, s.joint, "  ");
   }
   return y.str();
 }
@@ -374,7 +351,7 @@ std::string networkLaunch(const std::string& yaml_path, const NetworkResult& r) 
   std::ostringstream l;
   l << "<launch>\n  <!-- ladar_perception network calibration: one static_transform_publisher per "
        "sensor, each reading its transform from the YAML. -->\n";
-  l << "  <rosparam command=\"load\" file=\"" << sanitize(yaml_path)
+  l << "  <rosparam command=\"load\" file=\"" << yamlText(yaml_path)
     << "\" ns=\"ladar_calibration_network\"/>\n";
   for (const NetworkSensorResult& s : r.sensors) {
     const std::string key = networkKey(s.name);

@@ -13,50 +13,58 @@
 namespace ladar_perception {
 namespace calibration {
 
-namespace {
 // Always with a decimal point: XmlRpc must read a double, never an int.
-std::string num(double v) {
+std::string yamlNumber(double v) {
   char buf[64];
   std::snprintf(buf, sizeof(buf), "%.9f", v);
   return buf;
 }
-std::string fig(double v) {
+
+std::string yamlFigure(double v, int significant_digits) {
   if (!std::isfinite(v)) return "unobservable";
   char buf[64];
-  std::snprintf(buf, sizeof(buf), "%.6g", v);
+  std::snprintf(buf, sizeof(buf), "%.*g", significant_digits, v);
   return buf;
 }
-std::string sanitize(const std::string& s) {
+
+std::string yamlText(const std::string& s) {
   std::string out;
-  for (char c : s) out += (c == '\n' || c == '\r') ? ' ' : c;
+  for (char c : s) out += (c == '\n' || c == '\r' || c == '"') ? ' ' : c;
   return out;
 }
-}  // namespace
+
+std::string transformStampedYaml(const std::string& parent_frame, const std::string& child_frame,
+                                 const Pose6& extrinsic, const std::string& indent) {
+  const Eigen::Isometry3d t = toIsometry(extrinsic);
+  const Eigen::Quaterniond q(t.linear());
+  std::ostringstream y;
+  y << indent << "header:\n" << indent << "  frame_id: \"" << yamlText(parent_frame) << "\"\n";
+  y << indent << "child_frame_id: \"" << yamlText(child_frame) << "\"\n";
+  y << indent << "transform:\n";
+  y << indent << "  translation: {x: " << yamlNumber(t.translation().x())
+    << ", y: " << yamlNumber(t.translation().y()) << ", z: " << yamlNumber(t.translation().z())
+    << "}\n";
+  y << indent << "  rotation: {x: " << yamlNumber(q.x()) << ", y: " << yamlNumber(q.y())
+    << ", z: " << yamlNumber(q.z()) << ", w: " << yamlNumber(q.w()) << "}\n";
+  return y.str();
+}
 
 std::string staticTransformYaml(const std::string& parent_frame, const std::string& child_frame,
                                 const CalibrationResult& r) {
-  const Eigen::Isometry3d t = toIsometry(r.extrinsic);
-  const Eigen::Quaterniond q(t.linear());
   std::ostringstream y;
-  y << "# ladar_perception calibration of " << sanitize(child_frame) << " against the reference, "
-    << "method " << sanitize(r.method) << "\n";
-  y << "# success: " << (r.success ? "true" : "false") << "; " << sanitize(r.message) << "\n";
-  y << "# x y z roll pitch yaw: " << num(r.extrinsic[0]) << " " << num(r.extrinsic[1]) << " "
-    << num(r.extrinsic[2]) << " " << num(r.extrinsic[3]) << " " << num(r.extrinsic[4]) << " "
-    << num(r.extrinsic[5]) << "\n";
+  y << "# ladar_perception calibration of " << yamlText(child_frame) << " against the reference, "
+    << "method " << yamlText(r.method) << "\n";
+  y << "# success: " << (r.success ? "true" : "false") << "; " << yamlText(r.message) << "\n";
+  y << "# x y z roll pitch yaw:";
+  for (int i = 0; i < 6; ++i) y << " " << yamlNumber(r.extrinsic[i]);
+  y << "\n";
   y << "# stddev x y z roll pitch yaw:";
-  for (int i = 0; i < 6; ++i) y << " " << fig(r.stddev[i]);
-  y << "\n# final cost: " << fig(r.final_cost) << "\n";
+  for (int i = 0; i < 6; ++i) y << " " << yamlFigure(r.stddev[i]);
+  y << "\n# final cost: " << yamlFigure(r.final_cost) << "\n";
   y << "# unobservable:";
   for (const std::string& u : r.unobservable) y << " " << u;
   y << (r.unobservable.empty() ? " none" : "") << "\n";
-  y << "header:\n  frame_id: \"" << sanitize(parent_frame) << "\"\n";
-  y << "child_frame_id: \"" << sanitize(child_frame) << "\"\n";
-  y << "transform:\n";
-  y << "  translation: {x: " << num(t.translation().x()) << ", y: " << num(t.translation().y())
-    << ", z: " << num(t.translation().z()) << "}\n";
-  y << "  rotation: {x: " << num(q.x()) << ", y: " << num(q.y()) << ", z: " << num(q.z())
-    << ", w: " << num(q.w()) << "}\n";
+  y << transformStampedYaml(parent_frame, child_frame, r.extrinsic);
   return y.str();
 }
 
