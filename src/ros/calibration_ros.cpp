@@ -201,6 +201,7 @@ void CalibrationRos::cloudCallback(const sensor_msgs::PointCloud2ConstPtr& msg, 
   try {
     const ros::WallTime start = ros::WallTime::now();
     std::lock_guard<std::mutex> work(work_mutex_);
+    if (!admits(sensor, msg->header.frame_id, msg->header.stamp)) return;
     std::string error;
     CloudError code = CloudError::kNone;
     if (!calibrationPoints(*msg, min_range_, max_range_, &work_points_, &error, &code)) {
@@ -209,7 +210,7 @@ void CalibrationRos::cloudCallback(const sensor_msgs::PointCloud2ConstPtr& msg, 
                         "': " + error);
       return;
     }
-    if (enqueue(sensor, msg->header.frame_id, msg->header.stamp)) {
+    if (enqueue(sensor, msg->header.stamp)) {
       health_.processed((ros::WallTime::now() - start).toSec());  // conversion + thinning
     }
   } catch (const std::exception& e) {
@@ -221,13 +222,14 @@ void CalibrationRos::scanCallback(const sensor_msgs::LaserScanConstPtr& msg, std
   try {
     const ros::WallTime start = ros::WallTime::now();
     std::lock_guard<std::mutex> work(work_mutex_);
+    if (!admits(sensor, msg->header.frame_id, msg->header.stamp)) return;
     std::string error;
     if (!calibrationPoints(*msg, &work_points_, &error)) {
       health_.error("unreadable scan", sensors_[sensor].role + " scan in frame '" +
                                            msg->header.frame_id + "': " + error);
       return;
     }
-    if (enqueue(sensor, msg->header.frame_id, msg->header.stamp)) {
+    if (enqueue(sensor, msg->header.stamp)) {
       health_.processed((ros::WallTime::now() - start).toSec());  // conversion + thinning
     }
   } catch (const std::exception& e) {
@@ -241,23 +243,25 @@ namespace {
 constexpr std::size_t kRetainedWorkPoints = 1 << 19;
 }  // namespace
 
-bool CalibrationRos::enqueue(std::size_t sensor, const std::string& frame, const ros::Time& stamp) {
+bool CalibrationRos::admits(std::size_t sensor, const std::string& frame, const ros::Time& stamp) {
   Sensor& s = sensors_[sensor];
-  const std::string& role = s.role;
-
   {
     std::lock_guard<std::mutex> lock(mutex_);
     if (s.frame.empty()) s.frame = frame;
     if (frame != s.frame) {
-      health_.error("unexpected frame", role + " message in frame '" + frame +
+      health_.error("unexpected frame", s.role + " message in frame '" + frame +
                                             "', expected '" + s.frame + "'; ignored");
       return false;
     }
   }
-  if (s.interval > 0 && !s.last_kept.isZero() && stamp >= s.last_kept &&
-      (stamp - s.last_kept).toSec() < s.interval) {
-    return false;  // within the buffer interval of the last kept scan: not needed
-  }
+  // Within the buffer interval of the last kept scan: not needed, and not converted.
+  return !(s.interval > 0 && !s.last_kept.isZero() && stamp >= s.last_kept &&
+           (stamp - s.last_kept).toSec() < s.interval);
+}
+
+bool CalibrationRos::enqueue(std::size_t sensor, const ros::Time& stamp) {
+  Sensor& s = sensors_[sensor];
+  const std::string& role = s.role;
   thinned_.clear();
   if (s.voxel > 0) {
     thinner_.thin(work_points_.data(), work_points_.size(), s.voxel, &thinned_);
@@ -363,11 +367,18 @@ bool CalibrationRos::publishProgress(const cal::SearchProgress& p, const std::st
   return !shutting_down_ && ros::ok();
 }
 
-std::string CalibrationRos::outputPath() const {
-  if (!output_file_.empty()) return output_file_;
+namespace {
+// Where ROS keeps a node's files: $ROS_HOME, else ~/.ros, else /tmp.
+std::string rosHomeDir() {
   const char* ros_home = std::getenv("ROS_HOME");
   const char* home = std::getenv("HOME");
-  const std::string dir = ros_home ? ros_home : (home ? std::string(home) + "/.ros" : "/tmp");
+  return ros_home ? ros_home : (home ? std::string(home) + "/.ros" : "/tmp");
+}
+}  // namespace
+
+std::string CalibrationRos::outputPath() const {
+  if (!output_file_.empty()) return output_file_;
+  const std::string dir = rosHomeDir();
   std::string child = last_child_frame_.empty() ? "target" : last_child_frame_;
   for (char& c : child) {
     if (c == '/') c = '_';
@@ -528,10 +539,7 @@ void CalibrationRos::runCalibration(const ladar_perception::Calibrate::Request& 
 
 std::string CalibrationRos::networkOutputPath() const {
   if (!network_output_file_.empty()) return network_output_file_;
-  const char* ros_home = std::getenv("ROS_HOME");
-  const char* home = std::getenv("HOME");
-  const std::string dir = ros_home ? ros_home : (home ? std::string(home) + "/.ros" : "/tmp");
-  return dir + "/ladar_calibration_network.yaml";
+  return rosHomeDir() + "/ladar_calibration_network.yaml";
 }
 
 bool CalibrationRos::calibrateNetworkService(ladar_perception::CalibrateNetwork::Request& req,

@@ -82,10 +82,13 @@ class CalibrationRos {
 
   void cloudCallback(const sensor_msgs::PointCloud2ConstPtr& msg, std::size_t sensor);
   void scanCallback(const sensor_msgs::LaserScanConstPtr& msg, std::size_t sensor);
-  // Thins work_points_ and buffers the scan to wait for its vehicle pose; false when the message
-  // was ignored (not the sensor's frame, or more points than the buffer holds). Called with
-  // work_mutex_ held.
-  bool enqueue(std::size_t sensor, const std::string& frame, const ros::Time& stamp);
+  // Whether a message is to be buffered, checked before it is converted: false (ignored) when it
+  // is not in the sensor's frame (a throttled error) or comes within the sensor's buffer interval
+  // of the last kept scan. Called with work_mutex_ held.
+  bool admits(std::size_t sensor, const std::string& frame, const ros::Time& stamp);
+  // Thins work_points_ and buffers the scan to wait for its vehicle pose; false when the scan has
+  // more points than the buffer holds. Called with work_mutex_ held, after admits().
+  bool enqueue(std::size_t sensor, const ros::Time& stamp);
   void drainPending(const ros::TimerEvent&);
   bool calibrateService(ladar_perception::Calibrate::Request& req,
                         ladar_perception::Calibrate::Response& res);
