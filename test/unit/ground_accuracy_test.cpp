@@ -85,9 +85,11 @@ TEST(GroundAccuracy, NegativeObstaclesOnlyBelowASupportedLine) {
   ungated.negative_support_distance = 0.f;
   const GroundAccuracy on = evaluate("rural", verticalScanDefaultParams());
   const GroundAccuracy off = evaluate("rural", ungated);
-  // 98.98 % on these 3 scans (99.10 % on ground_eval's 10): a floor against regressions.
+  // 99.31 % on these 3 scans, 99.07 % ungated (99.42 / 99.16 % on ground_eval's 10): a floor
+  // against regressions. The gap was wider while the line's tail went on climbing behind the
+  // obstacle (98.98 %); it no longer rises faster than the column's straight estimate.
   EXPECT_GE(on.groundRecall(), 0.985);
-  EXPECT_GT(on.groundRecall(), off.groundRecall() + 0.004);
+  EXPECT_GT(on.groundRecall(), off.groundRecall() + 0.002);
   EXPECT_GT(on.obstacleRecall(), off.obstacleRecall() - 0.003);
   const GroundAccuracy holes_on = evaluate("potholes", verticalScanDefaultParams());
   const GroundAccuracy holes_off = evaluate("potholes", ungated);

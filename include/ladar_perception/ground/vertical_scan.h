@@ -127,18 +127,23 @@ struct VerticalScanParams {
   float neighbour_min_step = 0.01f;          // [m]
   // Local ground height (beyond the thesis: the ground-height estimate shared across azimuth
   // that 5.1.2 names; off in every named setting, needs laser_neighbours). After the labels
-  // above, the returns called ground are averaged per cell of a polar grid (one column wide,
+  // above, first the feet of faces: a ground return next to an obstacle (a cell the
+  // laser-neighbour pass marked) from which a face rises becomes an obstacle. A face rises from
+  // a return when the returns of the rows above it in its sub-column stay within
+  // local_ground_face_dr of it in r, the first one rises at most a row spacing at its range,
+  // and one reaches local_ground_face_height above it (the foot of a wall, a car, a fence).
+  // Then the returns called ground are averaged per cell of a polar grid (one column wide,
   // local_ground_cell long in r), and an obstacle return whose height lies within
   // [-local_ground_below, +local_ground_above] of the mean ground height of the cells around
   // it (local_ground_columns and local_ground_rings on each side, at least
-  // local_ground_min_returns ground returns) becomes ground, unless a face rises from it: the
-  // returns of the rows above it in its sub-column stay within local_ground_face_dr of it in r,
-  // the first one rises at most a row spacing at its range, and one reaches
-  // local_ground_face_height above it (the foot of a wall, a car, a fence). It takes back the
-  // flat ground (rough grass, kerbside parking, the sidewalk) that the per-column terms call
-  // obstacle on real scans, and with it curb faces lower than local_ground_face_height (as
-  // labelled data sets call them) and returns of shallow holes within local_ground_below of
-  // the ground around them. Costs about 3.5 M instructions per 124,000-return scan.
+  // local_ground_min_returns ground returns) becomes ground, unless a face rises from it. With
+  // local_ground_roughness k > 0 the band widens, where the ground around is rough (grass, a
+  // verge), to k standard deviations of its heights, at most local_ground_roughness_max (a
+  // local roughness model, 5.1.2). It takes back the flat ground (rough grass, kerbside
+  // parking, the sidewalk) that the per-column terms call obstacle on real scans, and with it
+  // curb faces lower than local_ground_face_height (as labelled data sets call them) and
+  // returns of shallow holes within the band of the ground around them. Costs about 5 M
+  // instructions per 124,000-return scan.
   bool local_ground = false;
   float local_ground_cell = 1.0f;            // [m]
   int local_ground_columns = 1;
@@ -148,6 +153,8 @@ struct VerticalScanParams {
   float local_ground_above = 0.04f;          // [m]
   float local_ground_face_dr = 0.1f;         // [m]
   float local_ground_face_height = 0.2f;     // [m]
+  float local_ground_roughness = 0.f;        // [standard deviations]; 0 = off
+  float local_ground_roughness_max = 0.1f;   // [m]
 };
 
 // Settings by name: "thesis" (the thesis's method and settings), "default" (beyond it), and
@@ -264,8 +271,10 @@ struct GroundLine {
 // is only the straight estimate from the sensor's ground point, and the lower bound is
 // -(track_max_step + gd dr).
 // (VerticalScanGround seeds it with the straight estimate over the representatives off
-// vertical surfaces.) The accepted polyline is sampled at the knots (extrapolated beyond
-// the last ground return); knot_support gets 1 / (1 + distance to the nearest ground return).
+// vertical surfaces.) The accepted polyline is sampled at the knots; beyond the last ground
+// return it is extrapolated with the tracked slope, but rising no faster than slope0 (flat
+// where slope0 < 0): the terrain there is unobserved. knot_support gets 1 / (1 + distance to
+// the nearest ground return).
 // `scratch` holds at least 2 * (n + 1) floats. Returns the number of accepted returns.
 int trackGroundLine(const float* r, const float* height, int n, const VerticalScanParams& p,
                     float slope0, int knots, float* knot_height, float* knot_support,
@@ -409,9 +418,9 @@ class VerticalScanGround : public GroundModel {
   std::vector<std::pair<uint32_t, float>> neighbour_obstacles_;
   // curb_policy kCurbGround: the curb faces' returns to relabel ground.
   std::vector<uint32_t> curb_ground_;
-  // local_ground: (height sum, count) of the ground returns per cell of the polar grid
-  // (ring-major), the same summed over each cell's neighbourhood, and the rings out to
-  // max_range.
+  // local_ground: (height sum, squared height sum, count) of the ground returns per cell of the
+  // polar grid (ring-major), the same summed over each cell's neighbourhood, and the rings out
+  // to max_range.
   std::vector<float> local_grid_, local_around_;
   int local_rings_ = 0;
   // Per bin: its representative's cell, and the band of heights that is level with the ground

@@ -158,7 +158,7 @@ void VerticalScanGround::setParams(const VerticalScanParams& params) {
   if (p.local_ground_min_returns < 1) p.local_ground_min_returns = 1;
   if (p.local_ground && p.laser_neighbours) {
     local_rings_ = static_cast<int>(p.max_range / p.local_ground_cell) + 1;
-    local_grid_.assign(2 * static_cast<std::size_t>(columns_) * local_rings_, 0.f);
+    local_grid_.assign(3 * static_cast<std::size_t>(columns_) * local_rings_, 0.f);
     local_around_.assign(local_grid_.size(), 0.f);
     local_bin_cell_.assign(static_cast<std::size_t>(columns_) * kMaxRingRows, 0);
     local_bin_band_.assign(2 * local_bin_cell_.size(), 0.f);

@@ -348,7 +348,12 @@ LADAR_HOT_PATH int trackGroundLine(const float* r, const float* height, int n, c
     knot_height[k] = h;
     knot_support[k] = 1.f / (1.f + std::max(dist, 0.f));
   }
-  // The tail: the line extrapolated from the last ground return with the current slope.
+  // The tail: the line extrapolated from the last ground return. The terrain beyond it is
+  // unobserved in this column, so the tail rises no faster than the column's straight estimate
+  // (eqs 3.4-3.9; flat where that falls): a line that bent upward over the last metres of
+  // ground (a verge, a ramp, a building's plinth) otherwise climbs on through the wall behind
+  // them, and the wall's returns below it become ground.
+  slope = std::min(slope, std::max(slope0, 0.f));
   const float last_r = gr[m - 1], last_h = gh[m - 1];
 #if defined(__SSE2__)
   {

@@ -7,12 +7,14 @@
 
 #include "ladar_perception/ground/vertical_scan.h"
 #include "label_scan.h"
+#include "vertical_scan_internal.h"
 
 namespace ladar_perception {
 
 using vertical_scan::forEachLabelled;
 
-// Runs after labelFromLaserNeighbours() (its face test reads the range image binPoints() wrote).
+// Runs after labelFromLaserNeighbours(): its face test reads the range image binPoints() wrote,
+// and the feet of faces are looked for in the cells that pass marked (next to an obstacle).
 void VerticalScanGround::relabelFromLocalGround(GroundClassification* out) {
   const VerticalScanParams& p = params_;
   const std::size_t n = bin_.size();
@@ -29,69 +31,6 @@ void VerticalScanGround::relabelFromLocalGround(GroundClassification* out) {
       static_cast<int>(static_cast<float>(knots_used_) * p.segment_length * inv_cell) + 2));
   const int last_ring = rings - 1;
   const std::size_t cells = static_cast<std::size_t>(rings) * cols;
-  // (sum of heights, count) of the ground returns per cell, ring-major: cell = ring * cols +
-  // column. The obstacle returns are tested against the cell of their bin's representative
-  // (3.3 step 1; bin_cell): the returns of a bin, one laser across one column, mostly lie
-  // within a cell of it in r.
-  float* __restrict grid = local_grid_.data();
-  std::fill(grid, grid + 2 * cells, 0.f);
-  const std::size_t bin_count = static_cast<std::size_t>(cols) << shift;
-  uint32_t* __restrict bin_cell = local_bin_cell_.data();
-  const float* rep_rh = rep_.data() + 2;
-  for (std::size_t b = 0; b < bin_count; ++b) {
-    const float r = rep_rh[2 * b];
-    int ring = static_cast<int>(std::max(r, 0.f) * inv_cell);
-    ring = ring < last_ring ? ring : last_ring;
-    bin_cell[b] = static_cast<uint32_t>(ring * cols + static_cast<int>(b >> shift));
-  }
-  // A return labelled ground is a known one: its bin is in the grid.
-  forEachLabelled(labels, n, kLabelGround, [=](std::size_t i) {
-    int ring = static_cast<int>(rr[i] * inv_cell);
-    ring = ring < last_ring ? ring : last_ring;
-    float* g = grid + 2 * (static_cast<std::size_t>(ring) * cols + (bins[i] >> shift));
-    g[0] += hh[i];
-    g[1] += 1.f;
-  });
-
-  // The neighbourhood of each cell: local_ground_rings cells along r, then
-  // local_ground_columns columns each side (around the circle), summed.
-  const int wr = p.local_ground_rings;
-  const int wc = std::min(p.local_ground_columns, (cols - 1) / 2);
-  float* __restrict around = local_around_.data();
-  if (wr > 0) {
-    for (int k = 0; k < rings; ++k) {
-      float* dst = around + 2 * static_cast<std::size_t>(k) * cols;
-      std::fill(dst, dst + 2 * cols, 0.f);
-      for (int q = std::max(0, k - wr); q <= std::min(last_ring, k + wr); ++q) {
-        const float* src = grid + 2 * static_cast<std::size_t>(q) * cols;
-        for (int c = 0; c < 2 * cols; ++c) dst[c] += src[c];
-      }
-    }
-    std::copy(around, around + 2 * cells, grid);
-  }
-  // Across columns: the interior of a ring 2 * cols floats at a time, its wc first and last
-  // columns around the circle.
-  for (int k = 0; k < rings; ++k) {
-    const float* __restrict src = grid + 2 * static_cast<std::size_t>(k) * cols;
-    float* __restrict dst = around + 2 * static_cast<std::size_t>(k) * cols;
-    std::copy(src, src + 2 * cols, dst);
-    for (int d = 1; d <= wc; ++d) {
-      for (int q = 2 * wc; q < 2 * (cols - wc); ++q) dst[q] += src[q - 2 * d] + src[q + 2 * d];
-    }
-    auto edge = [&](int c) {
-      float s = 0.f, m = 0.f;
-      for (int d = -wc; d <= wc; ++d) {
-        const int cc = (c + d + cols) % cols;
-        s += src[2 * cc];
-        m += src[2 * cc + 1];
-      }
-      dst[2 * c] = s;
-      dst[2 * c + 1] = m;
-    };
-    for (int c = 0; c < wc; ++c) edge(c);
-    for (int c = cols - wc; c < cols; ++c) edge(c);
-  }
-
   // A face rises from return i: walking up its sub-column of the range image, the returns
   // stay within face_dr of it in r, the first rises no more than two row spacings at its
   // range, and one reaches face_height above it. An empty cell is passed over.
@@ -121,19 +60,105 @@ void VerticalScanGround::relabelFromLocalGround(GroundClassification* out) {
     return false;
   };
 
+  // One pass over the ground returns. First the feet of faces: a ground return from which a
+  // face rises (the lowest returns of a wall, a fence or a car's side, which the per-column
+  // terms take for ground) is an obstacle. Looked for in the cells that
+  // labelFromLaserNeighbours() marked (next to an obstacle: a face's foot lies below one), in
+  // all when it marked none. The other ground returns are summed per cell of the grid, ring-major
+  // (cell = ring * cols + column): sum of heights, sum of squared heights, count.
+  const float thr = p.tolerances.obstacle_threshold;
+  const float above_threshold = std::nextafter(thr, 2.f);
+  const bool feet = above_threshold <= 1.f;  // else no return can be an obstacle
+  const uint8_t* mark = cell_mark_.data() + row_step;
+  const uint8_t stamp = mark_stamp_;
+  const bool marked = deep_listed_;
+  float* __restrict grid = local_grid_.data();
+  std::fill(grid, grid + 3 * cells, 0.f);
+  forEachLabelled(labels, n, kLabelGround, [&](std::size_t i) LADAR_ALWAYS_INLINE {
+    if (feet && (!marked || mark[cell[i]] == stamp) && faceRises(i)) {
+      labels[i] = kLabelObstacle;
+      prob[i] = std::max(prob[i], above_threshold);
+      return;
+    }
+    int ring = static_cast<int>(rr[i] * inv_cell);  // a ground return is a known one
+    ring = ring < last_ring ? ring : last_ring;
+    float* g = grid + 3 * (static_cast<std::size_t>(ring) * cols + (bins[i] >> shift));
+    const float h = hh[i];
+    g[0] += h;
+    g[1] += h * h;
+    g[2] += 1.f;
+  });
+  // Each bin's cell for the obstacle returns below: that of its representative (3.3 step 1;
+  // the returns of a bin, one laser across one column, mostly lie within a cell of it in r).
+  const std::size_t bin_count = static_cast<std::size_t>(cols) << shift;
+  uint32_t* __restrict bin_cell = local_bin_cell_.data();
+  const float* rep_rh = rep_.data() + 2;
+  for (std::size_t b = 0; b < bin_count; ++b) {
+    const float r = rep_rh[2 * b];
+    int ring = static_cast<int>(std::max(r, 0.f) * inv_cell);
+    ring = ring < last_ring ? ring : last_ring;
+    bin_cell[b] = static_cast<uint32_t>(ring * cols + static_cast<int>(b >> shift));
+  }
+
+  // The neighbourhood of each cell: local_ground_rings cells along r, then
+  // local_ground_columns columns each side (around the circle), summed.
+  const int wr = p.local_ground_rings;
+  const int wc = std::min(p.local_ground_columns, (cols - 1) / 2);
+  float* __restrict around = local_around_.data();
+  if (wr > 0) {
+    for (int k = 0; k < rings; ++k) {
+      float* dst = around + 3 * static_cast<std::size_t>(k) * cols;
+      std::fill(dst, dst + 3 * cols, 0.f);
+      for (int q = std::max(0, k - wr); q <= std::min(last_ring, k + wr); ++q) {
+        const float* src = grid + 3 * static_cast<std::size_t>(q) * cols;
+        for (int c = 0; c < 3 * cols; ++c) dst[c] += src[c];
+      }
+    }
+    std::copy(around, around + 3 * cells, grid);
+  }
+  // Across columns: the interior of a ring 3 * cols floats at a time, its wc first and last
+  // columns around the circle.
+  for (int k = 0; k < rings; ++k) {
+    const float* __restrict src = grid + 3 * static_cast<std::size_t>(k) * cols;
+    float* __restrict dst = around + 3 * static_cast<std::size_t>(k) * cols;
+    std::copy(src, src + 3 * cols, dst);
+    for (int d = 1; d <= wc; ++d) {
+      for (int q = 3 * wc; q < 3 * (cols - wc); ++q) dst[q] += src[q - 3 * d] + src[q + 3 * d];
+    }
+    auto edge = [&](int c) {
+      float s0 = 0.f, s1 = 0.f, s2 = 0.f;
+      for (int d = -wc; d <= wc; ++d) {
+        const int cc = (c + d + cols) % cols;
+        s0 += src[3 * cc];
+        s1 += src[3 * cc + 1];
+        s2 += src[3 * cc + 2];
+      }
+      dst[3 * c] = s0;
+      dst[3 * c + 1] = s1;
+      dst[3 * c + 2] = s2;
+    };
+    for (int c = 0; c < wc; ++c) edge(c);
+    for (int c = cols - wc; c < cols; ++c) edge(c);
+  }
+
   // Obstacle returns level with the ground around them become ground: per bin, the band of
   // heights around the mean ground height of its cell's neighbourhood (empty where it has fewer
-  // than local_ground_min_returns ground returns).
+  // than local_ground_min_returns ground returns), widened on rough ground to
+  // local_ground_roughness standard deviations of those heights (at most
+  // local_ground_roughness_max).
   const float min_returns = static_cast<float>(p.local_ground_min_returns);
   const float below = p.local_ground_below, above = p.local_ground_above;
-  const float thr = p.tolerances.obstacle_threshold;
+  const float rough = p.local_ground_roughness, rough_max = p.local_ground_roughness_max;
   float* __restrict band = local_bin_band_.data();
   for (std::size_t b = 0; b < bin_count; ++b) {
-    const float* a = around + 2 * static_cast<std::size_t>(bin_cell[b]);
-    const bool enough = a[1] >= min_returns;
-    const float mean = enough ? a[0] / a[1] : 0.f;
-    band[2 * b] = enough ? mean - below : 1e30f;
-    band[2 * b + 1] = enough ? mean + above : -1e30f;
+    const float* a = around + 3 * static_cast<std::size_t>(bin_cell[b]);
+    const bool enough = a[2] >= min_returns;
+    const float count = enough ? a[2] : 1.f;
+    const float mean = a[0] / count;
+    const float var = std::max(a[1] / count - mean * mean, 0.f);
+    const float spread = rough > 0.f ? std::min(rough * std::sqrt(var), rough_max) : 0.f;
+    band[2 * b] = enough ? mean - std::max(below, spread) : 1e30f;
+    band[2 * b + 1] = enough ? mean + std::max(above, spread) : -1e30f;
   }
   forEachLabelled(labels, n, kLabelObstacle, [=](std::size_t i) {
     const float* lh = band + 2 * static_cast<std::size_t>(bins[i]);
