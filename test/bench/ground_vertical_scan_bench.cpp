@@ -7,7 +7,8 @@
 //   valgrind --tool=callgrind --instr-atstart=no ground_vertical_scan_bench --callgrind-once FILE.bin
 // loads the file, warms nothing, and instruments exactly one classify call (--thesis: the thesis
 // mode; --bins: the default without laser_neighbours; --curb-ground: the default with
-// curb_policy ground; --local-ground: the default with local_ground; --warm: after one uninstrumented call,
+// curb_policy ground; --local-ground: the default with local_ground; --set key=value: one
+// parameter of the table on top, as ground_eval's --set; --warm: after one uninstrumented call,
 // as in a running stream).
 // Output of one call for comparisons between builds:
 //   ground_vertical_scan_bench --dump FILE.bin OUT [--thesis|--bins|--curb-ground|--local-ground]
@@ -119,7 +120,7 @@ void BM_SimulatedUrban(benchmark::State& state, Mode mode) {
   runClassify(state, scan.cloud, SensorPose::fromHeight(1.73f), paramsOf(mode));
 }
 
-int callgrindOnce(const std::string& path, Mode mode, bool warm) {
+int callgrindOnce(const std::string& path, const VerticalScanParams& params, bool warm) {
   PackedCloud cloud;
   std::string error;
   PointCloudView view;
@@ -127,7 +128,7 @@ int callgrindOnce(const std::string& path, Mode mode, bool warm) {
     std::cerr << error << "\n";
     return 1;
   }
-  VerticalScanGround model(paramsOf(mode));
+  VerticalScanGround model(params);
   GroundClassification out;
   // --warm: the workspace of a steady-state call (allocated and touched once before), e.g. for
   // --cache-sim=yes.
@@ -168,8 +169,21 @@ int dumpOnce(const std::string& path, const std::string& out_path, Mode mode) {
 int main(int argc, char** argv) {
   if (argc >= 3 && std::strcmp(argv[1], "--callgrind-once") == 0) {
     bool warm = false;
-    for (int a = 3; a < argc; ++a) warm = warm || std::strcmp(argv[a], "--warm") == 0;
-    return callgrindOnce(argv[2], modeOf(argc, argv, 3), warm);
+    VerticalScanParams params = paramsOf(modeOf(argc, argv, 3));
+    for (int a = 3; a < argc; ++a) {
+      warm = warm || std::strcmp(argv[a], "--warm") == 0;
+      if (std::strcmp(argv[a], "--set") == 0 && a + 1 < argc) {
+        const std::string kv = argv[++a];
+        const std::size_t eq = kv.find('=');
+        std::string error;
+        if (eq == std::string::npos ||
+            !setVerticalScanParam(&params, kv.substr(0, eq), std::atof(kv.c_str() + eq + 1), &error)) {
+          std::cerr << "--set " << kv << ": " << (error.empty() ? "expected key=value" : error) << "\n";
+          return 2;
+        }
+      }
+    }
+    return callgrindOnce(argv[2], params, warm);
   }
   if (argc >= 4 && std::strcmp(argv[1], "--dump") == 0) return dumpOnce(argv[2], argv[3], modeOf(argc, argv, 4));
   for (const char* f : {"000000.bin", "000001.bin"}) {
