@@ -206,7 +206,8 @@ void usage() {
          "  target_voxel, reference_voxel, huber, normal_neighbours, max_correspondence_end,\n"
          "  max_iterations, plane_sweep_iterations, plane_sweep_passes, plane_sweep_coarse_points,\n"
          "  plane_sweep_fine_points, plane_sweep_fine_iterations, sparse_extrapolation_steps,\n"
-         "  sparse_final_iterations, coarse_restarts, plane_sweep_consistency,\n"
+         "  sparse_final_iterations, plane_sweep_polish_step, plane_sweep_polish_min_rise,\n"
+         "  plane_sweep_flat_rise, coarse_restarts, plane_sweep_consistency,\n"
          "  sparse_level_keep_every, sparse_level_normal_z, sparse_level_extrapolation_steps,\n"
          "  score_cluster, symmetric_refinement, noise_floor, range_noise, range_noise_per_m2,\n"
          "  reference_noise\n"
@@ -223,8 +224,9 @@ void usage() {
          "--drift [--duration S] [--bump x,y,z,roll,pitch,yaw --bump-at T]: the drift monitor\n"
          "  on a drive back and forth along the world's drive (a 3D pair), checks every 4 s; prints\n"
          "  the false alarms before the bump, the time to ERROR after it, the CPU per check\n"
-         "--trajectory thesis|turns: random poses around the centre (the thesis's), or a slalom\n"
-         "  of +-2 m, 20 m wavelength, along the world's standard drive\n"
+         "--trajectory thesis|turns|hill: random poses around the centre (the thesis's), or a slalom\n"
+         "  of +-2 m, 20 m wavelength, along the world's standard drive; hill: that slalom on the\n"
+         "  hillside world (unless --world), turns and grade changes\n"
          "--sparse-noise-floor: 2D targets' residual weighting by the reference's local noise\n"
          "  (default 0.02 m, 0 = off)\n"
          "--sparse-range-noise M, --sparse-reference-noise M: that weighting's target range noise\n"
@@ -494,6 +496,7 @@ void printDiagnosis(const cal::ExperimentTrial& trial, const cal::CalibrationPar
 
 int main(int argc, char** argv) {
   std::string pair_name = "velodyne-velodyne", method = cal::defaultMethod(), world_name = "thesis";
+  bool world_given = false;
   std::string json_path, plot_path, noise_name = "table4.1", reference_noise_name;
   int trials = 10, poses = 10, windows = 0, only = -1;
   uint64_t seed = 1;
@@ -526,7 +529,7 @@ int main(int argc, char** argv) {
       else if (a == "--method") method = value("--method");
       else if (a == "--trials") trials = std::stoi(value("--trials"));
       else if (a == "--seed") seed = std::stoull(value("--seed"));
-      else if (a == "--world") world_name = value("--world");
+      else if (a == "--world") { world_name = value("--world"); world_given = true; }
       else if (a == "--json") json_path = value("--json");
       else if (a == "--plot") plot_path = value("--plot");
       else if (a == "--noise") noise_name = value("--noise");
@@ -605,6 +608,12 @@ int main(int argc, char** argv) {
   options.poses = poses;
   options.drive_speed = drive_speed;
   options.stereo_while_driving = !stereo_at_poses;
+  // "hill": the slalom on the hillside world, whose drive climbs and falls over its slopes:
+  // turns and grade changes, so that the vehicle's motion excites every axis of a 2D pair.
+  if (trajectory == "hill") {
+    trajectory = "turns";
+    if (!world_given) world_name = "hillside";
+  }
   options.trajectory = trajectory;
   // The alley (walls at y = +-3.2 from x = -60 to 160) is driven along, not turned in: poses
   // within +-5 m along x around its middle, +-0.5 m across, yaw +-0.02 rad. (With the thesis's
@@ -673,6 +682,9 @@ int main(int argc, char** argv) {
     else if (k == "plane_sweep_fine_iterations") params.plane_sweep_fine_iterations = static_cast<int>(v);
     else if (k == "sparse_extrapolation_steps") params.sparse_extrapolation_steps = static_cast<int>(v);
     else if (k == "sparse_final_iterations") params.sparse_final_iterations = static_cast<int>(v);
+    else if (k == "plane_sweep_polish_step") params.plane_sweep_polish_step = v;
+    else if (k == "plane_sweep_polish_min_rise") params.plane_sweep_polish_min_rise = v;
+    else if (k == "plane_sweep_flat_rise") params.plane_sweep_flat_rise = v;
     else if (k == "sparse_level_keep_every") params.sparse_level_keep_every = static_cast<int>(v);
     else if (k == "sparse_level_normal_z") params.sparse_level_normal_z = v;
     else if (k == "sparse_level_extrapolation_steps") params.sparse_level_extrapolation_steps = static_cast<int>(v);

@@ -104,6 +104,21 @@ struct CalibrationParams {
   // benchmark's trials by at most 1 cm (in y, about as often towards the truth as away) and left
   // the worst errors of seeds 1-3 within 2 mm, for ~0.5 s CPU less.
   int sparse_final_iterations = 14;
+  // 2D targets: after the final refinement its held rotation about the ground line is polished
+  // on the refinement's own target with members this far apart [rad] (polishGroundLineRotation,
+  // 5 members a pass; ~1.5 s CPU). 0 = off. The sweep had left SICKs on a drive with turns
+  // 0.005-0.008 rad off along the family (4-7 cm in z).
+  double plane_sweep_polish_step = 0.004;
+  // ... only where the profile of the polish rises by at least this share of its minimum two
+  // steps away. Flatter profiles are within the score's noise (a SICK on the thesis's random
+  // poses: 0.2-0.5 %, and one such polish moved z 7 cm the wrong way); those of the drives with
+  // turns rise 0.7-10 %.
+  double plane_sweep_polish_min_rise = 0.005;
+  // ... and where it rises by less than this, the data does not fix the rotation about the ground
+  // line at all: the DOFs it moves are reported unobservable (a SICK-SICK pair on the thesis's
+  // random poses, whose profile was flat to 1e-5 while the estimate sat 16 cm off in z and
+  // 0.02 rad in pitch; SICK-Velodyne profiles there rise 0.2-2.5 %).
+  double plane_sweep_flat_rise = 0.001;
   // 2D targets: the final refinement uses the target thinned in normal space
   // (thinLevelSurfaceReturns at the sweep's member): of the returns on near-level surfaces
   // (|n_z| >= sparse_level_normal_z) one in sparse_level_keep_every is kept. 1 = off. The

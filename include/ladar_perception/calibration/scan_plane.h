@@ -50,9 +50,11 @@ bool refinedAlike(const SweepMember& a, const SweepMember& b, double ground_z, d
 // The rotation at the minimum of the least-squares parabola cost(angle) through the members
 // refined alike with `best` (refinedAlike), clamped to their range; *nearest is the index of the
 // member of those closest to it. False when fewer than three remain or the parabola has no
-// minimum.
+// minimum. *relative_curvature (optional): the parabola's curvature over its value at its
+// minimum (the cost rises by that times angle^2, relatively, away from the minimum).
 bool sweepProfileMinimum(const std::vector<SweepMember>& members, const SweepMember& best,
-                         double ground_z, double tolerance, double* minimum, std::size_t* nearest);
+                         double ground_z, double tolerance, double* minimum, std::size_t* nearest,
+                         double* relative_curvature = nullptr);
 
 }  // namespace calibration
 }  // namespace ladar_perception

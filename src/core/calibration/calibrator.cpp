@@ -363,6 +363,8 @@ CalibrationResult calibrateAttempt(const CalibrationInput& input,
     final_target = &level_thinned;
   }
   double swept_member_moved = 0;  // [m] in x and y, by the final refinement
+  // The polish's profile along the ground-line family: its rise two steps from its minimum.
+  double family_rise = std::numeric_limits<double>::quiet_NaN();
   // The refinement's own minimum, before a 3D target's two directions are averaged: the
   // observability is read there (the mean is not a minimum of the cost the check reads, and
   // along a direction the scene does not fix it could sit anywhere).
@@ -381,6 +383,10 @@ CalibrationResult calibrateAttempt(const CalibrationInput& input,
     swept_member_moved = (out.refinement.extrinsic.head<2>() - estimate.head<2>()).norm();
     cancelled = out.refinement.cancelled;
     estimate = out.refinement.extrinsic;
+    if (!cancelled && after_sweep && swept_member_moved <= params.plane_sweep_consistency) {
+      family_rise = polishGroundLineRotation(params, progress, model, target, *final_target, rp,
+                                             &estimate, &out.refinement, &cancelled, &out);
+    }
     out.trace.insert(out.trace.end(), out.refinement.trace.begin(), out.refinement.trace.end());
     out.evaluations += out.refinement.iterations;
     lin = out.refinement.at_solution;
@@ -435,6 +441,23 @@ CalibrationResult calibrateAttempt(const CalibrationInput& input,
   out.stddev = out.observability.stddev;
   out.unobservable = out.observability.unobservable_names;
   out.extrinsic = estimate;
+  // A flat profile along the ground-line family: its rotation is not determined by the data,
+  // whatever the curvature at the solution says. The DOFs it moves are named (a rotation axis
+  // carrying 30 % of the rotation; a translation moving 1 cm or more per 0.01 rad).
+  Pose6 family;
+  if (family_rise < params.plane_sweep_flat_rise &&
+      groundLineStepDirection(estimate, params.ground_z, &family)) {
+    const double turn = family.tail<3>().norm();
+    for (int i = 0; i < 6 && turn > 0; ++i) {
+      const double per_rad = std::abs(family[i]) / turn;
+      if (per_rad < (i < 3 ? 1.0 : 0.3)) continue;
+      out.stddev[i] = std::numeric_limits<double>::infinity();
+      const std::string name = dofName(i);
+      if (std::find(out.unobservable.begin(), out.unobservable.end(), name) == out.unobservable.end()) {
+        out.unobservable.push_back(name);
+      }
+    }
+  }
 
   std::ostringstream msg;
   if (cancelled) {

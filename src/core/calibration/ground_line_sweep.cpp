@@ -174,5 +174,95 @@ void groundLineSweep(const CalibrationInput& input, const CalibrationParams& par
   out.trace.push_back(estimate);
 }
 
+double polishGroundLineRotation(const CalibrationParams& params, const ProgressFn& progress,
+                              const SurfaceModel& model, const ScanSet& target,
+                              const ScanSet& final_target, const RefinementParams& final_rp,
+                              Pose6* estimate_io, RefinementResult* refinement_io, bool* cancelled_io,
+                              CalibrationResult* out_io) {
+  const double none = std::numeric_limits<double>::quiet_NaN();
+  const double step = params.plane_sweep_polish_step;
+  if (!(step > 0.0)) return none;
+  bool& cancelled = *cancelled_io;
+  CalibrationResult& out = *out_io;
+  RefinementParams scored = final_rp;
+  scored.range_noise = params.sparse_range_noise;
+  scored.reference_noise = params.sparse_reference_noise;
+  const double end = final_rp.max_correspondence_end;
+  const auto score = [&](const Pose6& p) {
+    return sparseTargetCost(linearise(model, target, p, end, scored), target.numPoints(), scored);
+  };
+  // A member: `from` rotated by `angle` about its ground line, refined with the rotation held.
+  const auto member = [&](const Pose6& from, double angle, SweepMember* m, RefinementResult* r) {
+    Pose6 start = from;
+    if (angle != 0.0 && !rotateAboutGroundLine(from, angle, params.ground_z, &start)) return false;
+    RefinementParams rp = final_rp;
+    if (!groundLineStepDirection(start, params.ground_z, &rp.frozen_direction)) return false;
+    *r = refine(model, final_target, start, rp, progress);
+    cancelled = cancelled || r->cancelled;
+    out.evaluations += r->iterations;
+    if (!insideRegion(r->extrinsic, params)) return false;
+    m->pose = r->extrinsic;
+    m->cost = score(r->extrinsic);
+    return std::isfinite(m->cost);
+  };
+  const double start_cost = score(*estimate_io);
+  if (!std::isfinite(start_cost)) return none;
+  std::vector<SweepMember> profile;
+  std::vector<RefinementResult> refined;
+  SweepMember centre{0.0, start_cost, *estimate_io};
+  profile.push_back(centre);
+  refined.push_back(*refinement_io);
+  double minimum = 0.0, curvature = 0.0, rise = none;
+  std::size_t nearest = 0;
+  for (int walk = 0; walk <= params.plane_sweep_walks && !cancelled; ++walk) {
+    for (int k = -2; k <= 2 && !cancelled; ++k) {
+      const double angle = centre.angle + k * step;
+      bool known = false;
+      for (const SweepMember& m : profile) known = known || std::abs(m.angle - angle) < 1e-9;
+      if (known) continue;
+      SweepMember m;
+      RefinementResult r;
+      if (!member(centre.pose, angle - centre.angle, &m, &r)) continue;
+      m.angle = angle;
+      profile.push_back(m);
+      refined.push_back(r);
+    }
+    if (cancelled ||
+        !sweepProfileMinimum(profile, centre, params.ground_z, params.plane_sweep_consistency,
+                             &minimum, &nearest, &curvature)) {
+      return none;
+    }
+    // A profile that rises less than plane_sweep_polish_min_rise two steps from its minimum is
+    // flat within the score's noise: its minimum says nothing, and the estimate stays.
+    rise = curvature * 4.0 * step * step;
+    if (rise < params.plane_sweep_polish_min_rise) return rise;
+    // At the profile's edge the minimum is not bracketed: walk on from the edge member.
+    double lo = profile[0].angle, hi = lo;
+    for (const SweepMember& m : profile) {
+      lo = std::min(lo, m.angle);
+      hi = std::max(hi, m.angle);
+    }
+    if (minimum > lo + 1e-9 && minimum < hi - 1e-9) break;
+    centre = profile[nearest];
+  }
+  if (cancelled) return rise;
+  // The member at the minimum (refined from the nearest one), or the nearest itself.
+  SweepMember best = profile[nearest];
+  RefinementResult best_r = refined[nearest];
+  if (std::abs(minimum - best.angle) > 1e-6) {
+    SweepMember m;
+    RefinementResult r;
+    if (member(profile[nearest].pose, minimum - profile[nearest].angle, &m, &r) && m.cost < best.cost) {
+      best = m;
+      best_r = r;
+    }
+  }
+  if (!(best.cost < start_cost)) return rise;
+  *estimate_io = best.pose;
+  *refinement_io = best_r;
+  out.trace.push_back(best.pose);
+  return rise;
+}
+
 }  // namespace calibration
 }  // namespace ladar_perception

@@ -20,5 +20,21 @@ void groundLineSweep(const CalibrationInput& input, const CalibrationParams& par
                      ScanSet* sweep_coarse_target, ScanSet* sweep_fine_target, Pose6* estimate,
                      bool* cancelled, CalibrationResult* out);
 
+// After the final refinement (which holds the sweep's rotation about the ground line): the
+// rotation polished on the refinement's own target. Members at -2..+2 plane_sweep_polish_step
+// about *estimate are each refined with that rotation held (final_rp on final_target, as the
+// final refinement) and scored with the sweep's weighting on the whole target; the
+// least-squares parabola through them places the minimum (walking on, at most
+// plane_sweep_walks times, while it lies at an edge). *estimate and *refinement move to the
+// member refined there when it scores lower than *estimate. The sweep placed the rotation on
+// thinner targets from briefly refined members: up to 0.005 rad (5 cm in z at the ground line's
+// 10 m) off a minimum that the whole target shows clearly. Returns the profile's rise two steps
+// from its minimum (relative to the minimum's score; NaN when no profile was fitted).
+double polishGroundLineRotation(const CalibrationParams& params, const ProgressFn& progress,
+                              const SurfaceModel& model, const ScanSet& target,
+                              const ScanSet& final_target, const RefinementParams& final_rp,
+                              Pose6* estimate, RefinementResult* refinement, bool* cancelled,
+                              CalibrationResult* out);
+
 }  // namespace calibration
 }  // namespace ladar_perception

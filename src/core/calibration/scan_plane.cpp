@@ -68,7 +68,8 @@ bool refinedAlike(const SweepMember& a, const SweepMember& b, double ground_z, d
 }
 
 bool sweepProfileMinimum(const std::vector<SweepMember>& members, const SweepMember& best,
-                         double ground_z, double tolerance, double* minimum, std::size_t* nearest) {
+                         double ground_z, double tolerance, double* minimum, std::size_t* nearest,
+                         double* relative_curvature) {
   std::vector<std::size_t> alike;
   for (std::size_t i = 0; i < members.size(); ++i) {
     if (refinedAlike(best, members[i], ground_z, tolerance)) alike.push_back(i);
@@ -87,6 +88,10 @@ bool sweepProfileMinimum(const std::vector<SweepMember>& members, const SweepMem
   }
   const Eigen::Vector3d abc = ata.ldlt().solve(atb);
   if (!abc.allFinite() || !(abc[0] > 0)) return false;
+  if (relative_curvature) {
+    const double at_minimum = abc[2] - 0.25 * abc[1] * abc[1] / abc[0];
+    *relative_curvature = at_minimum > 0 ? abc[0] / at_minimum : 0.0;
+  }
   *minimum = std::max(lo, std::min(hi, -0.5 * abc[1] / abc[0]));
   *nearest = alike[0];
   for (std::size_t i : alike) {
