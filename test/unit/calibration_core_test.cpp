@@ -805,26 +805,39 @@ TEST(CalibrationCalibrator, ASweepMemberTheFinalRefinementMovesFarRestartsTheSea
   for (int i = 3; i < 6; ++i) EXPECT_LT(std::abs(err[i]), 0.01) << cal::dofName(i);
 }
 
+namespace {
+
+// The trial and settings of `calibration_benchmark --pair PAIR --world WORLD --seed 1 --only T`
+// with `options` (trajectory, noise).
+void benchmarkTrial(const std::string& world_name, const std::string& pair_name,
+                    const cal::ExperimentOptions& options, int t, cal::ExperimentTrial* trial,
+                    cal::CalibrationParams* params) {
+  lp::sim::World world;
+  std::string error;
+  ASSERT_TRUE(lp::sim::makeStandardWorld(world_name, 1, &world, &error)) << error;
+  cal::PairSetup pair;
+  ASSERT_TRUE(cal::pairFromName(pair_name, &pair, &error)) << error;
+  ASSERT_TRUE(cal::makeTrial(world, pair, options, 1000003ULL + t, trial, &error)) << error;
+  params->spread = options.guess_offset;
+  cal::adaptParamsToPair(pair, params);
+  params->initial = trial->initial_guess;
+  params->search.seed = 7919ULL + t;
+}
+
+}  // namespace
+
 TEST(CalibrationCalibrator, TheGroundLineRotationIsPolishedOnTheWholeTarget) {
   // calibration_benchmark --pair sick-velodyne --trajectory turns --world urban --noise none
   // --only 0: the sweep places the SICK's rotation about its ground line from briefly refined
   // members on thinned targets, 0.005 rad off (5 cm in z); the final refinement holds it. The
   // whole target scores the truth lower, and the polish finds it.
-  lp::sim::World world;
-  std::string error;
-  ASSERT_TRUE(lp::sim::makeStandardWorld("urban", 1, &world, &error)) << error;
-  cal::PairSetup pair;
-  ASSERT_TRUE(cal::pairFromName("sick-velodyne", &pair, &error)) << error;
   cal::ExperimentOptions options;
   options.trajectory = "turns";
   options.noise = lp::sim::NoiseProfile::kNone;
   cal::ExperimentTrial trial;
-  ASSERT_TRUE(cal::makeTrial(world, pair, options, 1000003ULL, &trial, &error)) << error;
   cal::CalibrationParams params;
-  params.spread = options.guess_offset;
-  cal::adaptParamsToPair(pair, &params);
-  params.initial = trial.initial_guess;
-  params.search.seed = 7919ULL;
+  benchmarkTrial("urban", "sick-velodyne", options, 0, &trial, &params);
+  if (HasFatalFailure()) return;
   cal::CalibrationParams unpolished = params;
   unpolished.plane_sweep_polish_step = 0.0;
   const cal::CalibrationResult before = cal::calibrate(trial.input, unpolished);
@@ -846,19 +859,10 @@ TEST(CalibrationCalibrator, AFlatGroundLineProfileIsReportedUnobservable) {
   // estimate sat 16 cm off in z and 0.02 rad in pitch, and the curvature at it called every DOF
   // observable: a reported success. The polish's profile along the family is flat (it rises by
   // less than plane_sweep_flat_rise), so the DOFs the rotation moves are named unobservable.
-  lp::sim::World world;
-  std::string error;
-  ASSERT_TRUE(lp::sim::makeStandardWorld("thesis", 1, &world, &error)) << error;
-  cal::PairSetup pair;
-  ASSERT_TRUE(cal::pairFromName("sick-sick", &pair, &error)) << error;
-  const cal::ExperimentOptions options;
   cal::ExperimentTrial trial;
-  ASSERT_TRUE(cal::makeTrial(world, pair, options, 1000003ULL + 6, &trial, &error)) << error;
   cal::CalibrationParams params;
-  params.spread = options.guess_offset;
-  cal::adaptParamsToPair(pair, &params);
-  params.initial = trial.initial_guess;
-  params.search.seed = 7919ULL + 6;
+  benchmarkTrial("thesis", "sick-sick", cal::ExperimentOptions(), 6, &trial, &params);
+  if (HasFatalFailure()) return;
   const cal::CalibrationResult r = cal::calibrate(trial.input, params);
   const cal::Pose6 e = cal::poseDifference(r.extrinsic, trial.truth);
   EXPECT_FALSE(r.success) << r.message;
