@@ -116,8 +116,8 @@ struct CalibrationParams {
   double plane_sweep_polish_min_rise = 0.005;
   // ... and where it rises by less than this, the data does not fix the rotation about the ground
   // line at all: the DOFs it moves are reported unobservable (a SICK-SICK pair on the thesis's
-  // random poses, whose profile was flat to 1e-5 while the estimate sat 16 cm off in z and
-  // 0.02 rad in pitch; SICK-Velodyne profiles there rise 0.2-2.5 %).
+  // random poses, whose profile rose by less than 0.005 % while the estimate sat 16 cm off in z
+  // and 0.02 rad in pitch; SICK-Velodyne profiles there rise 0.2-2.5 %).
   double plane_sweep_flat_rise = 0.001;
   // 2D targets: the final refinement uses the target thinned in normal space
   // (thinLevelSurfaceReturns at the sweep's member): of the returns on near-level surfaces
