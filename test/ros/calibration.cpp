@@ -27,6 +27,8 @@
 #include "ladar_perception/Calibrate.h"
 #include "ladar_perception/calibration/experiment.h"
 
+#include "rostest_support.h"
+
 namespace cal = ladar_perception::calibration;
 namespace sim = ladar_perception::sim;
 
@@ -34,23 +36,7 @@ namespace {
 
 const char* kCalibrate = "/calibration/calibrate";
 
-sensor_msgs::PointCloud2Ptr cloudMessage(const cal::ScanSet& set, std::size_t k,
-                                         const std::string& frame, const ros::Time& stamp) {
-  sensor_msgs::PointCloud2Ptr msg(new sensor_msgs::PointCloud2);
-  msg->header.frame_id = frame;
-  msg->header.stamp = stamp;
-  sensor_msgs::PointCloud2Modifier mod(*msg);
-  mod.setPointCloud2FieldsByString(1, "xyz");
-  const uint32_t n = set.scan_begin[k + 1] - set.scan_begin[k];
-  mod.resize(n);
-  sensor_msgs::PointCloud2Iterator<float> x(*msg, "x"), y(*msg, "y"), z(*msg, "z");
-  for (uint32_t i = set.scan_begin[k]; i < set.scan_begin[k + 1]; ++i, ++x, ++y, ++z) {
-    *x = set.points[i].x();
-    *y = set.points[i].y();
-    *z = set.points[i].z();
-  }
-  return msg;
-}
+using ladar_perception::rostest::scanSetCloud;
 
 class CalibrationRostest : public ::testing::Test {
  protected:
@@ -89,8 +75,8 @@ class CalibrationRostest : public ::testing::Test {
       t.header.frame_id = "odom";
       t.child_frame_id = "base_link";
       broadcaster_.sendTransform(t);
-      ref_pub_.publish(cloudMessage(trial->input.reference, k, "velodyne_ref", stamp));
-      target_pub_.publish(cloudMessage(trial->input.target, k, "velodyne_target", stamp));
+      ref_pub_.publish(scanSetCloud(trial->input.reference, k, "velodyne_ref", stamp));
+      target_pub_.publish(scanSetCloud(trial->input.target, k, "velodyne_target", stamp));
       ros::Duration(0.15).sleep();
     }
     // Let the last pose's tf arrive after its scans, then let the nodelet's timer drain them.

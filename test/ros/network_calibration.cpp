@@ -24,6 +24,8 @@
 #include "ladar_perception/CalibrateNetwork.h"
 #include "ladar_perception/calibration/experiment.h"
 
+#include "rostest_support.h"
+
 namespace cal = ladar_perception::calibration;
 namespace sim = ladar_perception::sim;
 
@@ -33,23 +35,7 @@ const char* kService = "/calibration/calibrate_network";
 const char* kYaml = "/tmp/ladar_perception_network_rostest.yaml";
 const char* kLaunch = "/tmp/ladar_perception_network_rostest.launch";
 
-sensor_msgs::PointCloud2Ptr cloudMessage(const cal::ScanSet& set, std::size_t k,
-                                         const std::string& frame, const ros::Time& stamp) {
-  sensor_msgs::PointCloud2Ptr msg(new sensor_msgs::PointCloud2);
-  msg->header.frame_id = frame;
-  msg->header.stamp = stamp;
-  sensor_msgs::PointCloud2Modifier mod(*msg);
-  mod.setPointCloud2FieldsByString(1, "xyz");
-  const uint32_t n = set.scan_begin[k + 1] - set.scan_begin[k];
-  mod.resize(n);
-  sensor_msgs::PointCloud2Iterator<float> x(*msg, "x"), y(*msg, "y"), z(*msg, "z");
-  for (uint32_t i = set.scan_begin[k]; i < set.scan_begin[k + 1]; ++i, ++x, ++y, ++z) {
-    *x = set.points[i].x();
-    *y = set.points[i].y();
-    *z = set.points[i].z();
-  }
-  return msg;
-}
+using ladar_perception::rostest::scanSetCloud;
 
 cal::NetworkSetup threeVelodynes() {
   cal::NetworkSetup n;
@@ -107,9 +93,9 @@ TEST(NetworkCalibrationRostest, ThreeSensorsThroughCalibrateLaunch) {
     t.header.frame_id = "odom";
     t.child_frame_id = "base_link";
     broadcaster.sendTransform(t);
-    ref_pub.publish(cloudMessage(trial.input.reference, k, "velodyne_ref", stamp));
+    ref_pub.publish(scanSetCloud(trial.input.reference, k, "velodyne_ref", stamp));
     for (std::size_t s = 0; s < target_pubs.size(); ++s) {
-      target_pubs[s].publish(cloudMessage(trial.input.targets[s].scans, k, network.target_names[s], stamp));
+      target_pubs[s].publish(scanSetCloud(trial.input.targets[s].scans, k, network.target_names[s], stamp));
     }
     ros::Duration(0.2).sleep();
   }

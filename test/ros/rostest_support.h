@@ -19,12 +19,33 @@
 #include <geometry_msgs/TransformStamped.h>
 #include <ros/ros.h>
 #include <sensor_msgs/PointCloud2.h>
+#include <sensor_msgs/point_cloud2_iterator.h>
 
+#include "ladar_perception/calibration/accumulation.h"
 #include "ladar_perception/cloud/point_cloud_view.h"
 #include "ladar_perception/ros/cloud_conversion.h"
 
 namespace ladar_perception {
 namespace rostest {
+
+// Scan k of a calibration scan set as an x, y, z PointCloud2 in `frame` (the calibration
+// rostests publish the simulator's trials through it).
+inline sensor_msgs::PointCloud2Ptr scanSetCloud(const calibration::ScanSet& set, std::size_t k,
+                                                const std::string& frame, const ros::Time& stamp) {
+  sensor_msgs::PointCloud2Ptr msg(new sensor_msgs::PointCloud2);
+  msg->header.frame_id = frame;
+  msg->header.stamp = stamp;
+  sensor_msgs::PointCloud2Modifier mod(*msg);
+  mod.setPointCloud2FieldsByString(1, "xyz");
+  mod.resize(set.scan_begin[k + 1] - set.scan_begin[k]);
+  sensor_msgs::PointCloud2Iterator<float> x(*msg, "x"), y(*msg, "y"), z(*msg, "z");
+  for (uint32_t i = set.scan_begin[k]; i < set.scan_begin[k + 1]; ++i, ++x, ++y, ++z) {
+    *x = set.points[i].x();
+    *y = set.points[i].y();
+    *z = set.points[i].z();
+  }
+  return msg;
+}
 
 // Polls `done` every `poll` seconds (wall time) until it holds or `seconds` have passed; returns
 // its last value.
