@@ -68,6 +68,9 @@ void ElevationRowTable::build(const std::vector<float>& elevations_deg) {
     while (row + 1 < rows_ && a > 0.5f * (el[row] + el[row + 1])) ++row;
     lut_[c] = static_cast<uint8_t>(row);
   }
+  // Three readable bytes past the last cell: the AVX2 binning gathers a 32-bit word per lane
+  // and keeps its low byte.
+  lut_.resize(static_cast<std::size_t>(cells) + 3, 0);
 }
 
 // --------------------------------------------------------------------------------------------
@@ -231,6 +234,153 @@ int VerticalScanGround::columnOf(float x, float y) const {
   return static_cast<int>(columnCoordinate(x, y));
 }
 
+#if defined(LADAR_CLONES)
+namespace {
+
+// What binPoints() hands its 8-lane loop: the cloud's packed x, y, z, the tables and constants
+// of the binning, and the arrays it writes.
+struct BinPass {
+  const uint8_t* xyz;  // x of point 0; y and z follow it
+  std::size_t step, n;
+  float min_r2, max_r2, tz, max_c, quarter, cells_per_column, last_sub;
+  const ElevationRowTable* row_table;
+  const float* atan_lut;
+  int shift, cell_row_shift, rows, ring_top;
+  uint32_t unknown_bin;
+  uint32_t *bins, *cell, *image;
+  float *rr, *hh, *prob;
+  uint8_t* labels;
+};
+
+// The first four floats of the point at p and of the one four points on.
+__attribute__((target("avx2"))) inline __m256 loadPointPair(const uint8_t* p, std::size_t step) {
+  return _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_loadu_ps(reinterpret_cast<const float*>(p))),
+                              _mm_loadu_ps(reinterpret_cast<const float*>(p + 4 * step)), 1);
+}
+
+// binPoints()'s SSE2 loop with 8 lanes and the two table lookups as gathers (AVX2). Every lane
+// repeats the scalar loop's arithmetic operation for operation, so the bins, cells, r and
+// heights are bit-identical to it. Returns the first point it left to the caller.
+template <bool kRing, bool kSubColumns>
+__attribute__((target("avx2"))) std::size_t binPointsAvx2(const BinPass& b, const PointCloudView& view) {
+  const __m256 v_min_r2 = _mm256_set1_ps(b.min_r2), v_max_r2 = _mm256_set1_ps(b.max_r2);
+  const __m256 v_tz = _mm256_set1_ps(b.tz);
+  const __m256 v_min_r = _mm256_set1_ps(kMinR);
+  const __m256 v_t_min = _mm256_set1_ps(b.row_table->tMin());
+  const __m256 v_inv_cell = _mm256_set1_ps(b.row_table->invCell());
+  const __m256 v_max_cell = _mm256_set1_ps(b.row_table->maxCell());
+  const __m256 v_zero = _mm256_setzero_ps();
+  const __m256 v_cells = _mm256_set1_ps(static_cast<float>(kAtanCells));
+  const __m256 v_half = _mm256_set1_ps(0.5f);
+  const __m256 v_max_c = _mm256_set1_ps(b.max_c);
+  const __m256 v_abs = _mm256_castsi256_ps(_mm256_set1_epi32(0x7fffffff));
+  const __m128i v_shift = _mm_cvtsi32_si128(b.shift);
+  const __m256i v_unknown_bin = _mm256_set1_epi32(static_cast<int>(b.unknown_bin));
+  const __m256i v_byte = _mm256_set1_epi32(0xFF);
+  const int* row_lut = reinterpret_cast<const int*>(b.row_table->lut());
+  const __m256 v_quarter = _mm256_set1_ps(b.quarter), v_half_turn = _mm256_set1_ps(2.f * b.quarter);
+  const __m256 v_sign_bit = _mm256_castsi256_ps(_mm256_set1_epi32(static_cast<int>(0x80000000u)));
+  const __m256 v_cells_per_column = _mm256_set1_ps(b.cells_per_column), v_last_sub = _mm256_set1_ps(b.last_sub);
+  const __m256i v_no_cell = _mm256_set1_epi32(-1);
+  const __m128i v_cell_row_shift = _mm_cvtsi32_si128(b.cell_row_shift);
+  const std::size_t step = b.step;
+  uint32_t* __restrict image = b.image;
+  std::size_t i = 0;
+  for (; i + 8 <= b.n; i += 8) {
+    const uint8_t* pt = b.xyz + i * step;
+    // Point k in the low half, point k + 4 in the high half.
+    const __m256 P0 = loadPointPair(pt, step), P1 = loadPointPair(pt + step, step);
+    const __m256 P2 = loadPointPair(pt + 2 * step, step), P3 = loadPointPair(pt + 3 * step, step);
+    // Transpose within each half: X, Y, Z become the eight points' x, y and z.
+    const __m256 t0 = _mm256_unpacklo_ps(P0, P1), t1 = _mm256_unpackhi_ps(P0, P1);
+    const __m256 t2 = _mm256_unpacklo_ps(P2, P3), t3 = _mm256_unpackhi_ps(P2, P3);
+    const __m256 X = _mm256_shuffle_ps(t0, t2, 0x44);
+    const __m256 Y = _mm256_shuffle_ps(t0, t2, 0xEE);
+    const __m256 Z = _mm256_shuffle_ps(t1, t3, 0x44);
+    const __m256 rs2 = _mm256_add_ps(_mm256_mul_ps(X, X), _mm256_mul_ps(Y, Y));
+    const __m256 d2 = _mm256_add_ps(rs2, _mm256_mul_ps(Z, Z));
+    const __m256 valid = _mm256_and_ps(_mm256_cmp_ps(d2, v_min_r2, _CMP_GE_OQ), _mm256_cmp_ps(d2, v_max_r2, _CMP_LE_OQ));
+    const int valid_bits = _mm256_movemask_ps(valid);
+    if (valid_bits == 0) {
+      for (int l = 0; l < 8; ++l) {
+        if (kSubColumns) b.cell[i + l] = kNoCell;
+        b.bins[i + l] = b.unknown_bin;
+        b.rr[i + l] = 0.f;
+        b.hh[i + l] = 0.f;
+        b.labels[i + l] = kLabelUnknown;
+        b.prob[i + l] = 0.f;
+      }
+      continue;
+    }
+    const __m256i valid_i = _mm256_castps_si256(valid);
+    const __m256 rc = _mm256_max_ps(_mm256_sqrt_ps(rs2), v_min_r);
+    __m256 f = _mm256_mul_ps(_mm256_sub_ps(_mm256_div_ps(Z, rc), v_t_min), v_inv_cell);
+    f = _mm256_min_ps(_mm256_max_ps(f, v_zero), v_max_cell);
+    const __m256 ax = _mm256_and_ps(X, v_abs), ay = _mm256_and_ps(Y, v_abs);
+    const __m256 steep = _mm256_cmp_ps(ay, ax, _CMP_GT_OQ);
+    const __m256 mx = _mm256_blendv_ps(ax, ay, steep);
+    const __m256 mn = _mm256_blendv_ps(ay, ax, steep);
+    const __m256 tt = _mm256_and_ps(_mm256_div_ps(mn, mx), _mm256_cmp_ps(mx, v_zero, _CMP_GT_OQ));
+    const __m256 neg_x = _mm256_cmp_ps(X, v_zero, _CMP_LT_OQ), neg_y = _mm256_cmp_ps(Y, v_zero, _CMP_LT_OQ);
+    __m256 off = _mm256_and_ps(steep, v_quarter);
+    off = _mm256_blendv_ps(off, _mm256_sub_ps(v_half_turn, off), neg_x);
+    off = _mm256_blendv_ps(off, _mm256_sub_ps(v_zero, off), neg_y);
+    off = _mm256_add_ps(off, v_half_turn);
+    const __m256 flip = _mm256_and_ps(_mm256_xor_ps(_mm256_xor_ps(steep, neg_x), neg_y), v_sign_bit);
+    const __m256i lut_i =
+        _mm256_and_si256(_mm256_cvttps_epi32(_mm256_add_ps(_mm256_mul_ps(tt, v_cells), v_half)), valid_i);
+    const __m256 lut = _mm256_i32gather_ps(b.atan_lut, lut_i, 4);
+    const __m256 a = _mm256_min_ps(_mm256_add_ps(off, _mm256_xor_ps(lut, flip)), v_max_c);
+    __m256i row;
+    if (kRing) {
+      alignas(32) int ring[8];
+      for (int l = 0; l < 8; ++l) {
+        int rg = view.ring(i + l);
+        if (b.ring_top >= 0) rg = b.ring_top - rg;
+        ring[l] = rg < 0 ? 0 : (rg >= b.rows ? b.rows - 1 : rg);
+      }
+      row = _mm256_load_si256(reinterpret_cast<const __m256i*>(ring));
+    } else {
+      const __m256i row_i = _mm256_and_si256(_mm256_cvttps_epi32(f), valid_i);
+      row = _mm256_and_si256(_mm256_i32gather_epi32(row_lut, row_i, 1), v_byte);
+    }
+    __m256i bin = _mm256_add_epi32(_mm256_sll_epi32(_mm256_cvttps_epi32(a), v_shift), row);
+    if (kSubColumns) {
+      const __m256i sub = _mm256_cvttps_epi32(_mm256_min_ps(_mm256_mul_ps(a, v_cells_per_column), v_last_sub));
+      const __m256i c = _mm256_or_si256(_mm256_sll_epi32(row, v_cell_row_shift), sub);
+      _mm256_storeu_si256(reinterpret_cast<__m256i*>(b.cell + i),
+                          _mm256_blendv_epi8(v_no_cell, c, valid_i));
+      // The image entry of a cell is the last return in it, in input order.
+      alignas(32) uint32_t lane_cell[8];
+      _mm256_store_si256(reinterpret_cast<__m256i*>(lane_cell), c);
+      const uint32_t i0 = static_cast<uint32_t>(i);
+      if (valid_bits == 0xFF) {
+        for (uint32_t l = 0; l < 8; ++l) image[lane_cell[l]] = i0 + l;
+      } else {
+        for (uint32_t l = 0; l < 8; ++l) {
+          if (valid_bits >> l & 1) image[lane_cell[l]] = i0 + l;
+        }
+      }
+    }
+    _mm256_storeu_ps(b.rr + i, _mm256_and_ps(rc, valid));
+    _mm256_storeu_ps(b.hh + i, _mm256_and_ps(_mm256_add_ps(Z, v_tz), valid));
+    if (valid_bits != 0xFF) {
+      bin = _mm256_blendv_epi8(v_unknown_bin, bin, valid_i);
+      for (int l = 0; l < 8; ++l) {
+        if (!(valid_bits >> l & 1)) {
+          b.labels[i + l] = kLabelUnknown;
+          b.prob[i + l] = 0.f;
+        }
+      }
+    }
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(b.bins + i), bin);
+  }
+  return i;
+}
+
+}  // namespace
+#endif
+
 template <bool kRing, bool kTilted, bool kFastXYZ, bool kSubColumns>
 LADAR_HOT_PATH void VerticalScanGround::binPoints(const PointCloudView& view, const SensorPose& pose,
                                    GroundClassification* out) {
@@ -298,6 +448,14 @@ LADAR_HOT_PATH void VerticalScanGround::binPoints(const PointCloudView& view, co
     const __m128 v_cells_per_column = _mm_set1_ps(cells_per_column), v_last_sub = _mm_set1_ps(last_sub);
     const __m128i v_no_cell = _mm_set1_epi32(-1);
     const __m128i v_cell_row_shift = _mm_cvtsi32_si128(cell_row_shift_);
+#if defined(LADAR_CLONES)
+    if (cpuHasAvx2()) {
+      const BinPass pass{src, step, n, min_r2, max_r2, t.z(), max_c, quarter, cells_per_column, last_sub,
+                         &row_table, atan_lut, shift, cell_row_shift_, rows, ring_top, unknown_bin,
+                         bins, cell, image, rr, hh, prob, labels};
+      i = binPointsAvx2<kRing, kSubColumns>(pass, view);
+    }
+#endif
     for (; i + 4 <= n; i += 4) {
       const uint8_t* pt = src + i * step;
       __m128 X = _mm_loadu_ps(reinterpret_cast<const float*>(pt));

@@ -120,10 +120,6 @@ __attribute__((target("avx2"))) inline int lowerMedianPositionAvx2(const float* 
   return __builtin_ctz(equal & in_bin);
 }
 
-bool cpuHasAvx2() {
-  __builtin_cpu_init();
-  return __builtin_cpu_supports("avx2");
-}
 const bool kCpuHasAvx2 = cpuHasAvx2();
 #endif
 

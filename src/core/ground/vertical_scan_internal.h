@@ -28,6 +28,17 @@
 #define LADAR_HOT_PATH
 #endif
 
+#if defined(LADAR_CLONES)
+// Whether this CPU runs AVX2: the stages' 8-lane loops (target attribute) run only where it does.
+inline bool cpuHasAvx2() {
+  static const bool has = [] {
+    __builtin_cpu_init();
+    return __builtin_cpu_supports("avx2") != 0;
+  }();
+  return has;
+}
+#endif
+
 // GCC's attribute on lambdas (clang rejects it after `mutable`, and inlines these lambdas
 // without it).
 #if defined(__GNUC__) && !defined(__clang__)
