@@ -11,6 +11,152 @@
 
 namespace ladar_perception {
 
+#if defined(LADAR_CLONES)
+namespace {
+
+// What labelPoints() hands its 8-lane loop (the default settings: every term on, SlopeErrorMax
+// constant): the arrays, the tolerances, and the lists it appends to.
+struct LabelPass {
+  std::size_t n;
+  const uint32_t* bins;
+  const float *rr, *hh, *rep, *knots;
+  uint8_t* labels;
+  float* prob;
+  uint32_t unknown_bin, rows;
+  int shift, K, last_k;
+  float inv_seg, g_above, g_below_delta, g_per_m, s_base, thr, inv_v_gnd, inv_v_slope, inv_foot, deep;
+  uint32_t* below_groups;
+  std::size_t* below_count;
+  uint32_t* deep_groups;
+  std::size_t* deep_count;
+};
+
+// Appends the lane bits of eight lanes as the two groups of four the lists hold.
+inline void appendGroups(uint32_t* groups, std::size_t* count, std::size_t i, int bits) {
+  const uint32_t g = static_cast<uint32_t>(i >> 2);
+  if (bits & 0xF) groups[(*count)++] = g << 4 | static_cast<uint32_t>(bits & 0xF);
+  if (bits & 0xF0) groups[(*count)++] = (g + 1) << 4 | static_cast<uint32_t>(bits >> 4);
+}
+
+// labelPoints()'s 4-wide loop for the default settings with 8 lanes (AVX2), the knots and the
+// representatives of the rows below and above read by gathers. Every lane repeats the 4-wide
+// loop's arithmetic operation for operation, so P(obstacle) and the labels are bit-identical to
+// it. Returns the first return it left to the caller.
+template <bool kDeep>
+__attribute__((target("avx2"))) std::size_t labelPointsAvx2(const LabelPass& L) {
+  const __m256 v_inv_seg = _mm256_set1_ps(L.inv_seg);
+  const __m256 v_last_k = _mm256_set1_ps(static_cast<float>(L.last_k));
+  const __m256 v_K = _mm256_set1_ps(static_cast<float>(L.K));
+  const __m256 v_zero = _mm256_setzero_ps(), v_one = _mm256_set1_ps(1.f);
+  const __m256 v_abs = _mm256_castsi256_ps(_mm256_set1_epi32(0x7fffffff));
+  const __m256 v_sign = _mm256_castsi256_ps(_mm256_set1_epi32(static_cast<int>(0x80000000u)));
+  const __m256 v_g_above = _mm256_set1_ps(L.g_above), v_g_below_delta = _mm256_set1_ps(L.g_below_delta);
+  const __m256 v_g_per_m = _mm256_set1_ps(L.g_per_m);
+  const __m256 v_s_base = _mm256_set1_ps(L.s_base);
+  const __m256 v_thr = _mm256_set1_ps(L.thr), v_inv_v_gnd = _mm256_set1_ps(L.inv_v_gnd);
+  const __m256i v_invalid = _mm256_set1_epi32(static_cast<int>(L.unknown_bin));
+  const __m128i v_shift = _mm_cvtsi32_si128(L.shift);
+  const __m256i v_row_mask = _mm256_set1_epi32(static_cast<int>(L.rows - 1));
+  const __m256 v_pad = _mm256_set1_ps(0.02f);
+  const __m256 v_inv_v_slope = _mm256_set1_ps(L.inv_v_slope);
+  const __m256 v_inv_foot = _mm256_set1_ps(L.inv_foot);
+  const __m256 v_deep = _mm256_set1_ps(L.deep);
+  static_assert(kLabelGround == 0, "label bytes assume ground = 0");
+  uint32_t obstacle_bytes[16], unknown_bytes[16];
+  for (int m = 0; m < 16; ++m) {
+    obstacle_bytes[m] = unknown_bytes[m] = 0;
+    for (int l = 0; l < 4; ++l) {
+      if (m >> l & 1) {
+        obstacle_bytes[m] |= static_cast<uint32_t>(kLabelObstacle) << (8 * l);
+        unknown_bytes[m] |= static_cast<uint32_t>(kLabelUnknown) << (8 * l);
+      }
+    }
+  }
+  const float* __restrict knots = L.knots;
+  const float* __restrict rep = L.rep;
+  float* __restrict prob = L.prob;
+  uint8_t* __restrict labels = L.labels;
+  std::size_t i = 0;
+  for (; i + 8 <= L.n; i += 8) {
+    const __m256i b = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(L.bins + i));
+    const __m256i invalid = _mm256_cmpeq_epi32(b, v_invalid);
+    const int invalid_bits = _mm256_movemask_ps(_mm256_castsi256_ps(invalid));
+    if (invalid_bits == 0xFF) continue;  // binPoints labelled them unknown
+    const __m256 r = _mm256_loadu_ps(L.rr + i);
+    const __m256 h = _mm256_loadu_ps(L.hh + i);
+    // The column's ground line at r: knots k - 1, k and k + 1 of each lane.
+    const __m256 col = _mm256_cvtepi32_ps(_mm256_srl_epi32(b, v_shift));
+    const __m256 f = _mm256_mul_ps(r, v_inv_seg);
+    const __m256 kf = _mm256_min_ps(_mm256_cvtepi32_ps(_mm256_cvttps_epi32(f)), v_last_k);
+    const __m256i knot_i = _mm256_andnot_si256(invalid, _mm256_cvttps_epi32(_mm256_add_ps(_mm256_mul_ps(col, v_K), kf)));
+    const __m256 kp = _mm256_i32gather_ps(knots - 1, knot_i, 4);
+    const __m256 k0 = _mm256_i32gather_ps(knots, knot_i, 4);
+    const __m256 k1 = _mm256_i32gather_ps(knots + 1, knot_i, 4);
+    const __m256 ground = _mm256_add_ps(k0, _mm256_mul_ps(_mm256_sub_ps(k1, k0), _mm256_sub_ps(f, kf)));
+    // Eqs 3.10, 3.11, 3.15.
+    const __m256 gnd_error = _mm256_sub_ps(ground, h);
+    const __m256 abs_error = _mm256_and_ps(gnd_error, v_abs);
+    const __m256 above = _mm256_cmp_ps(gnd_error, v_zero, _CMP_GT_OQ);
+    const int below_line_bits = _mm256_movemask_ps(above);  // GndError > 0
+    if (kDeep) {
+      const int deep_bits = _mm256_movemask_ps(_mm256_cmp_ps(gnd_error, v_deep, _CMP_GT_OQ)) & ~invalid_bits;
+      if (deep_bits) appendGroups(L.deep_groups, L.deep_count, i, deep_bits);
+    }
+    const __m256 g_max = _mm256_add_ps(_mm256_add_ps(v_g_above, _mm256_and_ps(above, v_g_below_delta)),
+                                       _mm256_mul_ps(v_g_per_m, r));
+    const __m256 gt = _mm256_min_ps(_mm256_div_ps(abs_error, g_max), v_one);
+    const __m256 st = _mm256_min_ps(_mm256_div_ps(abs_error, _mm256_mul_ps(r, v_s_base)), v_one);
+    __m256 p8 = _mm256_mul_ps(gt, st);
+    // The vertical-surface and foot terms (vertical_probability()).
+    const __m256 above_foot = _mm256_sub_ps(h, _mm256_min_ps(_mm256_min_ps(kp, k0), ground));
+    const __m256 g_foot = _mm256_min_ps(_mm256_mul_ps(above_foot, v_inv_v_gnd), v_one);
+    const __m256 need = _mm256_cmp_ps(g_foot, _mm256_max_ps(v_thr, p8), _CMP_GT_OQ);
+    const int need_bits = _mm256_movemask_ps(need) & ~invalid_bits;
+    if (need_bits) {
+      const __m256 g = _mm256_min_ps(_mm256_mul_ps(_mm256_xor_ps(gnd_error, v_sign), v_inv_v_gnd), v_one);
+      const __m256i bv = _mm256_andnot_si256(invalid, b);
+      const __m256i b2 = _mm256_add_epi32(bv, bv);
+      const __m256 r_hi = _mm256_i32gather_ps(rep + 2, b2, 4), h_hi = _mm256_i32gather_ps(rep + 3, b2, 4);
+      const __m256i row = _mm256_and_si256(bv, v_row_mask);
+      const __m256 has_hi = _mm256_and_ps(_mm256_castsi256_ps(_mm256_cmpgt_epi32(v_row_mask, row)),
+                                          _mm256_cmp_ps(r_hi, v_zero, _CMP_GE_OQ));
+      const __m256 rise = _mm256_div_ps(_mm256_sub_ps(h_hi, h),
+                                        _mm256_add_ps(_mm256_and_ps(_mm256_sub_ps(r, r_hi), v_abs), v_pad));
+      const __m256 u = _mm256_min_ps(_mm256_mul_ps(rise, v_inv_foot), v_one);
+      __m256 best = _mm256_blendv_ps(p8, _mm256_max_ps(_mm256_mul_ps(g_foot, u), p8), has_hi);
+      if (_mm256_movemask_ps(_mm256_cmp_ps(g, best, _CMP_GT_OQ)) & need_bits) {
+        const __m256 r_lo = _mm256_i32gather_ps(rep - 2, b2, 4), h_lo = _mm256_i32gather_ps(rep - 1, b2, 4);
+        const __m256 has_lo = _mm256_and_ps(_mm256_castsi256_ps(_mm256_cmpgt_epi32(row, _mm256_setzero_si256())),
+                                            _mm256_cmp_ps(r_lo, v_zero, _CMP_GE_OQ));
+        const __m256 sl_lo = _mm256_div_ps(_mm256_and_ps(_mm256_sub_ps(h, h_lo), v_abs),
+                                           _mm256_add_ps(_mm256_and_ps(_mm256_sub_ps(r, r_lo), v_abs), v_pad));
+        const __m256 sl_hi = _mm256_and_ps(rise, v_abs);
+        const __m256 one_side = _mm256_blendv_ps(_mm256_and_ps(has_hi, sl_hi), sl_lo, has_lo);
+        const __m256 both = _mm256_and_ps(has_lo, has_hi);
+        const __m256 local = _mm256_blendv_ps(one_side, _mm256_min_ps(sl_hi, sl_lo), both);
+        const __m256 v = _mm256_min_ps(_mm256_mul_ps(local, v_inv_v_slope), v_one);
+        best = _mm256_max_ps(_mm256_mul_ps(g, v), best);
+      }
+      const __m256 take = _mm256_andnot_ps(_mm256_castsi256_ps(invalid), need);
+      p8 = _mm256_blendv_ps(p8, best, take);
+    }
+    p8 = _mm256_andnot_ps(_mm256_castsi256_ps(invalid), p8);  // unknown: 0 as binPoints wrote
+    const int obstacle_bits = _mm256_movemask_ps(_mm256_cmp_ps(p8, v_thr, _CMP_GT_OQ)) & ~invalid_bits;
+    // Negative obstacles are rare: their groups are listed.
+    const int below_bits = obstacle_bits & below_line_bits;
+    if (below_bits) appendGroups(L.below_groups, L.below_count, i, below_bits);
+    _mm256_storeu_ps(prob + i, p8);
+    const uint32_t lo = obstacle_bytes[obstacle_bits & 0xF] | unknown_bytes[invalid_bits & 0xF];
+    const uint32_t hi = obstacle_bytes[obstacle_bits >> 4] | unknown_bytes[invalid_bits >> 4];
+    std::memcpy(labels + i, &lo, 4);
+    std::memcpy(labels + i + 4, &hi, 4);
+  }
+  return i;
+}
+
+}  // namespace
+#endif
+
 LADAR_HOT_PATH void VerticalScanGround::labelPoints(GroundClassification* out) {
   const VerticalScanParams& p = params_;
   const ObstacleToleranceParams& tol = p.tolerances;
@@ -143,9 +289,10 @@ LADAR_HOT_PATH void VerticalScanGround::labelPoints(GroundClassification* out) {
     // so that their tests leave it; any other combination runs the same code with run-time
     // tests. It captures by value: the label stores (bytes) may alias anything it read
     // through a reference, which would be reloaded after every store.
-    auto sse_loop = [=, &below_count, &deep_count](auto negative_c, auto vertical_c, auto foot_c, auto support_gate_c,
-                                      auto growing_slope_tolerance_c, auto deep_c) mutable LADAR_ALWAYS_INLINE {
-      for (; i + 4 <= n; i += 4) {
+    auto sse_loop = [=, &below_count, &deep_count](std::size_t from, auto negative_c, auto vertical_c, auto foot_c,
+                                                   auto support_gate_c, auto growing_slope_tolerance_c,
+                                                   auto deep_c) mutable LADAR_ALWAYS_INLINE {
+      for (i = from; i + 4 <= n; i += 4) {
         const __m128i b = _mm_loadu_si128(reinterpret_cast<const __m128i*>(bins + i));
         const __m128i invalid = _mm_cmpeq_epi32(b, v_invalid);
         const int invalid_bits = _mm_movemask_ps(_mm_castsi128_ps(invalid));
@@ -270,17 +417,25 @@ LADAR_HOT_PATH void VerticalScanGround::labelPoints(GroundClassification* out) {
       return i;
     };
     if (negative && vertical && foot && support_gate && s_per_m == 0.f) {
+#if defined(LADAR_CLONES)
+      if (cpuHasAvx2()) {
+        const LabelPass pass{n, bins, rr, hh, rep, knots, labels, prob, unknown_bin_, rows, shift, K, last_k,
+                             inv_seg, g_above, g_below_delta, g_per_m, s_base, thr, inv_v_gnd, inv_v_slope,
+                             inv_foot, g_below - 1e-3f, below_groups, &below_count, deep_groups, &deep_count};
+        i = list_deep ? labelPointsAvx2<true>(pass) : labelPointsAvx2<false>(pass);
+      }
+#endif
       if (list_deep) {
-        i = sse_loop(std::true_type{}, std::true_type{}, std::true_type{}, std::true_type{}, std::false_type{},
+        i = sse_loop(i, std::true_type{}, std::true_type{}, std::true_type{}, std::true_type{}, std::false_type{},
                      std::true_type{});
         deep_count_ = deep_count;
         deep_listed_ = true;
       } else {
-        i = sse_loop(std::true_type{}, std::true_type{}, std::true_type{}, std::true_type{}, std::false_type{},
+        i = sse_loop(i, std::true_type{}, std::true_type{}, std::true_type{}, std::true_type{}, std::false_type{},
                      std::false_type{});
       }
     } else {
-      i = sse_loop(negative, vertical, foot, support_gate, true, std::false_type{});
+      i = sse_loop(i, negative, vertical, foot, support_gate, true, std::false_type{});
     }
     for (std::size_t c = 0; c < below_count; ++c) {
       const std::size_t group = static_cast<std::size_t>(below_groups[c] >> 4) * 4;
