@@ -12,6 +12,7 @@
 // as in a running stream).
 // Output of one call for comparisons between builds:
 //   ground_vertical_scan_bench --dump FILE.bin OUT [--thesis|--bins|--curb-ground|--local-ground]
+//   [--set key=value ...]
 //   (n label bytes, n floats)
 #include <cstdio>
 #include <cstdlib>
@@ -142,7 +143,7 @@ int callgrindOnce(const std::string& path, const VerticalScanParams& params, boo
 
 // Writes the labels and P(obstacle) of one classify call (n label bytes, then n floats): a
 // byte-for-byte comparison of two builds, e.g. before and after a speed change.
-int dumpOnce(const std::string& path, const std::string& out_path, Mode mode) {
+int dumpOnce(const std::string& path, const std::string& out_path, const VerticalScanParams& params) {
   PackedCloud cloud;
   std::string error;
   PointCloudView view;
@@ -150,7 +151,7 @@ int dumpOnce(const std::string& path, const std::string& out_path, Mode mode) {
     std::cerr << error << "\n";
     return 1;
   }
-  VerticalScanGround model(paramsOf(mode));
+  VerticalScanGround model(params);
   GroundClassification out;
   model.classify(view, SensorPose::fromHeight(1.73f), &out);
   std::FILE* f = std::fopen(out_path.c_str(), "wb");
@@ -164,28 +165,38 @@ int dumpOnce(const std::string& path, const std::string& out_path, Mode mode) {
   return ok ? 0 : 1;
 }
 
+// The mode's params with each --set key=value of argv[from..] on top; false after a message.
+bool paramsOfArgs(int argc, char** argv, int from, VerticalScanParams* params) {
+  *params = paramsOf(modeOf(argc, argv, from));
+  for (int a = from; a < argc; ++a) {
+    if (std::strcmp(argv[a], "--set") == 0 && a + 1 < argc) {
+      const std::string kv = argv[++a];
+      const std::size_t eq = kv.find('=');
+      std::string error;
+      if (eq == std::string::npos ||
+          !setVerticalScanParam(params, kv.substr(0, eq), std::atof(kv.c_str() + eq + 1), &error)) {
+        std::cerr << "--set " << kv << ": " << (error.empty() ? "expected key=value" : error) << "\n";
+        return false;
+      }
+    }
+  }
+  return true;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
+  VerticalScanParams params;
   if (argc >= 3 && std::strcmp(argv[1], "--callgrind-once") == 0) {
     bool warm = false;
-    VerticalScanParams params = paramsOf(modeOf(argc, argv, 3));
-    for (int a = 3; a < argc; ++a) {
-      warm = warm || std::strcmp(argv[a], "--warm") == 0;
-      if (std::strcmp(argv[a], "--set") == 0 && a + 1 < argc) {
-        const std::string kv = argv[++a];
-        const std::size_t eq = kv.find('=');
-        std::string error;
-        if (eq == std::string::npos ||
-            !setVerticalScanParam(&params, kv.substr(0, eq), std::atof(kv.c_str() + eq + 1), &error)) {
-          std::cerr << "--set " << kv << ": " << (error.empty() ? "expected key=value" : error) << "\n";
-          return 2;
-        }
-      }
-    }
+    for (int a = 3; a < argc; ++a) warm = warm || std::strcmp(argv[a], "--warm") == 0;
+    if (!paramsOfArgs(argc, argv, 3, &params)) return 2;
     return callgrindOnce(argv[2], params, warm);
   }
-  if (argc >= 4 && std::strcmp(argv[1], "--dump") == 0) return dumpOnce(argv[2], argv[3], modeOf(argc, argv, 4));
+  if (argc >= 4 && std::strcmp(argv[1], "--dump") == 0) {
+    if (!paramsOfArgs(argc, argv, 4, &params)) return 2;
+    return dumpOnce(argv[2], argv[3], params);
+  }
   for (const char* f : {"000000.bin", "000001.bin"}) {
     benchmark::RegisterBenchmark((std::string("VerticalScan/kitti/") + f).c_str(),
                                  [f](benchmark::State& s) { BM_Kitti(s, f, Mode::kDefault); })
