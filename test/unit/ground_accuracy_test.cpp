@@ -56,10 +56,11 @@ INSTANTIATE_TEST_SUITE_P(
         Expectation{"hillside", 0.99, 0.99, 0.97},
         Expectation{"urban", 0.99, 0.99, 0.97},
         Expectation{"rural", 0.99, 0.99, 0.97},
-        // Ground targets met; pothole recall measured 68.0 % on these 3 scans (79.7 % over 10;
-        // 57.9 % without laser_neighbours). A fifth of the pothole returns lie within 3 cm of
-        // the road plane.
-        Expectation{"potholes", 0.99, 0.99, 0.67}),
+        // Ground targets met; pothole recall measured 64.6 % on these 3 scans (68.0 % without
+        // the local ground stage, which takes back the shallow returns level with the road
+        // around them; 57.9 % without laser_neighbours). A fifth of the pothole returns lie
+        // within 3 cm of the road plane.
+        Expectation{"potholes", 0.99, 0.99, 0.63}),
     [](const ::testing::TestParamInfo<Expectation>& info) { return std::string(info.param.world); });
 
 TEST(GroundAccuracy, DefaultBeatsThesisOnObstaclesAndKeepsTheGround) {
@@ -259,12 +260,15 @@ TEST(GroundAccuracy, LaserNeighboursBeatTheBinsAlone) {
   // walls, and the rims of holes, on the obstacle side; negative obstacles are measured from
   // the foot of a step. On these 3 scans, urban: 99.25 / 99.14 / 98.93 % with them, 97.88 /
   // 98.98 / 96.92 % without; potholes 68.0 % against 57.9 %.
-  const GroundAccuracy with = evaluate("urban", verticalScanDefaultParams());
+  // The default without its local ground stage (which needs them), against the bins alone.
+  VerticalScanParams neighbours = verticalScanDefaultParams();
+  neighbours.local_ground = false;
+  const GroundAccuracy with = evaluate("urban", neighbours);
   const GroundAccuracy without = evaluate("urban", verticalScanBinsParams());
   EXPECT_GT(with.groundPrecision(), without.groundPrecision() + 0.01);
   EXPECT_GT(with.obstacleRecall(), without.obstacleRecall() + 0.015);
   EXPECT_GE(with.groundRecall(), without.groundRecall());
-  const GroundAccuracy holes = evaluate("potholes", verticalScanDefaultParams());
+  const GroundAccuracy holes = evaluate("potholes", neighbours);
   const GroundAccuracy holes_without = evaluate("potholes", verticalScanBinsParams());
   EXPECT_GT(holes.obstacleRecall(), holes_without.obstacleRecall() + 0.08);
 }
@@ -326,9 +330,13 @@ TEST(GroundAccuracy, LaserNeighboursTestEveryReturnTheyCanRelabel) {
   // worlds and both parameter sets, so the cell stamps carry over between scans.
   SensorPose pose;
   pose.sensor_to_ground = evaluationSensorMount().cast<float>();
-  VerticalScanParams every = verticalScanDefaultParams();
+  // The local ground stage is off in both: it looks for the feet of faces in the cells this
+  // pass marks, and in every cell when it marked none (as after the general loop), by design.
+  VerticalScanParams base = verticalScanDefaultParams();
+  base.local_ground = false;
+  VerticalScanParams every = base;
   every.tolerances.slope_error_max_per_m = std::numeric_limits<float>::denorm_min();
-  VerticalScanGround marked(verticalScanDefaultParams()), all(every);
+  VerticalScanGround marked(base), all(every);
   for (const char* name : {"urban", "potholes"}) {
     sim::World world;
     std::string error;

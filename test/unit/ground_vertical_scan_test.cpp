@@ -870,10 +870,12 @@ struct RoughGroundWallScan {
 
 TEST(VerticalScanModel, LocalGroundTakesBackRoughGroundButNotTheFootOfAWall) {
   const RoughGroundWallScan s;
-  VerticalScanParams on = verticalScanDefaultParams();
+  // The stage without the roughness model against the default without the stage.
+  VerticalScanParams on = verticalScanDefaultParams(), off = verticalScanDefaultParams();
   std::string error;
-  ASSERT_TRUE(setVerticalScanParam(&on, "local_ground", 1, &error)) << error;
-  const std::vector<uint8_t> off_labels = s.labels(verticalScanDefaultParams());
+  ASSERT_TRUE(setVerticalScanParam(&off, "local_ground", 0, &error)) << error;
+  ASSERT_TRUE(setVerticalScanParam(&on, "local_ground_roughness", 0, &error)) << error;
+  const std::vector<uint8_t> off_labels = s.labels(off);
   const std::vector<uint8_t> on_labels = s.labels(on);
   std::size_t ground_n = 0, ground_off = 0, ground_on = 0, wall_n = 0, wall_off = 0, wall_on = 0;
   float lowest_wall = 1e9f;
@@ -913,9 +915,22 @@ TEST(VerticalScanModel, LocalGroundTakesBackRoughGroundButNotTheFootOfAWall) {
               static_cast<double>(ground_rough) / ground_n);
   EXPECT_GT(ground_rough, ground_on);
   EXPECT_EQ(wall_rough, wall_on);
-  // Off in every named setting.
-  EXPECT_FALSE(verticalScanDefaultParams().local_ground);
+  // The default's one standard deviation (1.7 cm here, within the 3-4 cm band) lies between the
+  // two.
+  const std::vector<uint8_t> default_labels = s.labels(verticalScanDefaultParams());
+  std::size_t ground_default = 0, wall_default = 0;
+  for (std::size_t i = 0; i < s.x.size(); ++i) {
+    if (s.wall[i]) wall_default += default_labels[i] == kLabelObstacle;
+    else ground_default += default_labels[i] == kLabelGround;
+  }
+  EXPECT_GE(ground_default, ground_on);
+  EXPECT_LE(ground_default, ground_rough);
+  EXPECT_EQ(wall_default, wall_on);
+  // On in the default settings, off in the thesis's and in the bins' (no laser neighbours).
+  EXPECT_TRUE(verticalScanDefaultParams().local_ground);
+  EXPECT_FLOAT_EQ(verticalScanDefaultParams().local_ground_roughness, 1.f);
   EXPECT_FALSE(verticalScanThesisParams().local_ground);
+  EXPECT_FALSE(verticalScanBinsParams().local_ground);
 }
 
 TEST(VerticalScanModel, LocalGroundMakesTheFeetOfANoisyWallObstacles) {
@@ -924,9 +939,9 @@ TEST(VerticalScanModel, LocalGroundMakesTheFeetOfANoisyWallObstacles) {
   // some of the wall's lowest returns ground. The local ground stage finds the face rising from
   // them (the rows above within local_ground_face_dr in r, 0.2 m higher).
   const RoughGroundWallScan s(40.f, 0.06f);
-  VerticalScanParams on = verticalScanDefaultParams();
-  on.local_ground = true;
-  const std::vector<uint8_t> off_labels = s.labels(verticalScanDefaultParams());
+  VerticalScanParams on = verticalScanDefaultParams(), off = verticalScanDefaultParams();
+  off.local_ground = false;
+  const std::vector<uint8_t> off_labels = s.labels(off);
   const std::vector<uint8_t> on_labels = s.labels(on);
   std::size_t wall_n = 0, foot_off = 0, foot_on = 0;
   for (std::size_t i = 0; i < s.x.size(); ++i) {

@@ -126,24 +126,27 @@ struct VerticalScanParams {
   float neighbour_spacing_fraction = 0.3f;   // [-]
   float neighbour_min_step = 0.01f;          // [m]
   // Local ground height (beyond the thesis: the ground-height estimate shared across azimuth
-  // that 5.1.2 names; off in every named setting, needs laser_neighbours). After the labels
-  // above, first the feet of faces: a ground return next to an obstacle (a cell the
-  // laser-neighbour pass marked) from which a face rises becomes an obstacle. A face rises from
-  // a return when the returns of the rows above it in its sub-column stay within
-  // local_ground_face_dr of it in r, the first one rises at most a row spacing at its range,
-  // and one reaches local_ground_face_height above it (the foot of a wall, a car, a fence).
-  // Then the returns called ground are averaged per cell of a polar grid (one column wide,
-  // local_ground_cell long in r), and an obstacle return whose height lies within
-  // [-local_ground_below, +local_ground_above] of the mean ground height of the cells around
-  // it (local_ground_columns and local_ground_rings on each side, at least
-  // local_ground_min_returns ground returns) becomes ground, unless a face rises from it. With
-  // local_ground_roughness k > 0 the band widens, where the ground around is rough (grass, a
-  // verge), to k standard deviations of its heights, at most local_ground_roughness_max (a
-  // local roughness model, 5.1.2). It takes back the flat ground (rough grass, kerbside
-  // parking, the sidewalk) that the per-column terms call obstacle on real scans, and with it
-  // curb faces lower than local_ground_face_height (as labelled data sets call them) and
-  // returns of shallow holes within the band of the ground around them. Costs about 3.5 M
-  // instructions per 124,000-return scan.
+  // that 5.1.2 names; on in the default settings, off in the thesis's and the bins', needs
+  // laser_neighbours). After the labels above, first the feet of faces: a ground return next to
+  // an obstacle (a cell the laser-neighbour pass marked) from which a face rises becomes an
+  // obstacle. A face rises from a return when the returns of the rows above it in its sub-column
+  // stay within local_ground_face_dr of it in r, the first one rises at most a row spacing at
+  // its range, and one reaches local_ground_face_height above it (the foot of a wall, a car, a
+  // fence). Then the returns called ground are averaged per cell of a polar grid (one column
+  // wide, local_ground_cell long in r), and an obstacle return whose height lies within
+  // [-local_ground_below, +local_ground_above] of the mean ground height of the cells around it
+  // (local_ground_columns and local_ground_rings on each side, at least
+  // local_ground_min_returns ground returns) becomes ground, unless a face rises from it or it
+  // lies on a face: the return of the row just above or below it lies within
+  // local_ground_face_dr in r and rises or falls by neighbour_min_step or more, at least as
+  // steeply as vertical_foot_slope (a curb's face, at any height; with curb_policy ground the
+  // laser-neighbour pass has made the curbs ground before). With local_ground_roughness k > 0
+  // the band widens, where the ground around is rough (grass, a verge), to k standard
+  // deviations of its heights, at most local_ground_roughness_max (a local roughness model,
+  // 5.1.2). It takes back the flat ground (rough grass, kerbside parking, the sidewalk) that the
+  // per-column terms call obstacle on real scans, and with it returns of shallow holes within
+  // the band of the ground around them. Costs about 3.3 M instructions per 124,000-return scan
+  // (AVX2).
   bool local_ground = false;
   float local_ground_cell = 1.0f;            // [m]
   int local_ground_columns = 1;

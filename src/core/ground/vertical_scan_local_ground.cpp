@@ -41,6 +41,8 @@ struct LocalGroundPass {
   float* __restrict grid;
   // Per bin, the band of heights that is ground (below, above).
   const float* __restrict band;
+  // A return on a face (onFace()) stays an obstacle.
+  float face_min_step, face_slope;
 
   // A face rises from return i: walking up its sub-column of the range image, the returns
   // stay within face_dr of it in r, the first rises no more than two row spacings at its
@@ -62,6 +64,24 @@ struct LocalGroundPass {
       if (first && rise > first_rise) return false;
       first = false;
       if (rise >= face_height) return true;
+    }
+    return false;
+  }
+  // A face through return i: the return of the row just above or just below it in its
+  // sub-column lies within face_dr of it in r and rises or falls by at least face_min_step, as
+  // steeply as face_slope or more (a curb's face, at any height).
+  bool onFace(std::size_t i) const {
+    const uint32_t c = cell[i];
+    const uint32_t row = c >> cell_shift;
+    const uint32_t row_step = 1u << cell_shift;
+    const float r = rr[i], h = hh[i];
+    for (int side = 0; side < 2; ++side) {
+      if (side == 0 ? row + 1 >= rows : row == 0) continue;
+      const uint32_t cn = side == 0 ? c + row_step : c - row_step;
+      const uint32_t j = image[cn];
+      if (!(j < n && cell[j] == cn)) continue;
+      const float dr = std::fabs(rr[j] - r), dh = std::fabs(hh[j] - h);
+      if (dr <= face_dr && dh >= face_min_step && dh >= face_slope * dr) return true;
     }
     return false;
   }
@@ -95,7 +115,7 @@ struct LocalGroundPass {
   }
   // Obstacle return i, level with the ground around it: ground unless a face rises from it.
   void levelReturn(std::size_t i) {
-    if (faceRises(i)) return;
+    if (faceRises(i) || onFace(i)) return;
     labels[i] = kLabelGround;
     prob[i] = std::min(prob[i], thr);
   }
@@ -188,7 +208,8 @@ LADAR_HOT_PATH void VerticalScanGround::relabelFromLocalGround(GroundClassificat
                        static_cast<uint32_t>(rows_), p.local_ground_face_dr, p.local_ground_face_height,
                        above_threshold <= 1.f,  // else no return can be an obstacle
                        deep_listed_, cell_mark_.data() + (std::size_t{1} << cell_row_shift_), mark_stamp_,
-                       above_threshold, thr, inv_cell, last_ring, cols, shift, grid, local_bin_band_.data()};
+                       above_threshold, thr, inv_cell, last_ring, cols, shift, grid, local_bin_band_.data(),
+                       p.neighbour_min_step, p.vertical_foot_slope};
   const uint8_t* labels = out->labels.data();
 
   // One pass over the ground returns. First the feet of faces: a ground return from which a
