@@ -42,7 +42,7 @@ struct LocalGroundPass {
   // Per bin, the band of heights that is ground (below, above).
   const float* __restrict band;
   // A return on a face (onFace()) stays an obstacle.
-  float face_min_step, face_slope;
+  float face_min_height, face_slope;
 
   // A face rises from return i: walking up its sub-column of the range image, the returns
   // stay within face_dr of it in r, the first rises no more than two row spacings at its
@@ -67,23 +67,33 @@ struct LocalGroundPass {
     }
     return false;
   }
-  // A face through return i: the return of the row just above or just below it in its
-  // sub-column lies within face_dr of it in r and rises or falls by at least face_min_step, as
-  // steeply as face_slope or more (a curb's face, at any height).
+  // A face through return i: walking up and down its sub-column from it (an empty cell passed
+  // over), each next return lies within face_dr in r of the one before and rises or falls at
+  // least as steeply as face_slope; the returns so reached span face_min_height or more in
+  // height (a curb's face, a step; not a bump of rough ground near the sensor, where the rows
+  // lie a few cm apart in r).
   bool onFace(std::size_t i) const {
+    constexpr uint32_t kMaxFaceRows = 8;
     const uint32_t c = cell[i];
     const uint32_t row = c >> cell_shift;
     const uint32_t row_step = 1u << cell_shift;
-    const float r = rr[i], h = hh[i];
+    float lo = hh[i], hi = hh[i];
     for (int side = 0; side < 2; ++side) {
-      if (side == 0 ? row + 1 >= rows : row == 0) continue;
-      const uint32_t cn = side == 0 ? c + row_step : c - row_step;
-      const uint32_t j = image[cn];
-      if (!(j < n && cell[j] == cn)) continue;
-      const float dr = std::fabs(rr[j] - r), dh = std::fabs(hh[j] - h);
-      if (dr <= face_dr && dh >= face_min_step && dh >= face_slope * dr) return true;
+      float r = rr[i], h = hh[i];
+      for (uint32_t k = 1; k <= kMaxFaceRows; ++k) {
+        if (side == 0 ? row + k >= rows : k > row) break;
+        const uint32_t cn = side == 0 ? c + k * row_step : c - k * row_step;
+        const uint32_t j = image[cn];
+        if (!(j < n && cell[j] == cn)) continue;
+        const float dr = std::fabs(rr[j] - r), dh = std::fabs(hh[j] - h);
+        if (dr > face_dr || dh < face_slope * dr) break;
+        r = rr[j];
+        h = hh[j];
+        lo = std::min(lo, h);
+        hi = std::max(hi, h);
+      }
     }
-    return false;
+    return hi - lo >= face_min_height;
   }
   bool footCandidate(std::size_t i) const { return feet && (!marked || mark[cell[i]] == stamp); }
   // Ground return i's cell of the grid (its own r).
@@ -209,7 +219,7 @@ LADAR_HOT_PATH void VerticalScanGround::relabelFromLocalGround(GroundClassificat
                        above_threshold <= 1.f,  // else no return can be an obstacle
                        deep_listed_, cell_mark_.data() + (std::size_t{1} << cell_row_shift_), mark_stamp_,
                        above_threshold, thr, inv_cell, last_ring, cols, shift, grid, local_bin_band_.data(),
-                       p.neighbour_min_step, p.vertical_foot_slope};
+                       p.local_ground_face_min_height, p.vertical_foot_slope};
   const uint8_t* labels = out->labels.data();
 
   // One pass over the ground returns. First the feet of faces: a ground return from which a
