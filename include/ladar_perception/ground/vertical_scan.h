@@ -95,7 +95,7 @@ struct VerticalScanParams {
   // representative of the laser row above. P = max(P_3.15, P_vertical, P_foot). 0 = off.
   float vertical_foot_slope = 1.0f;
   // Laser-neighbour context (beyond the thesis; on in the default settings, off here and in
-  // the "bins" settings: it costs about a fifth more instructions per scan, see README).
+  // the "bins" settings: it costs about a quarter more instructions per scan, see README).
   // Each return's neighbours are the returns of the laser rows just below and above it in the
   // same sub-column (neighbour_cells_per_column per column, about 0.19 degrees for 1.5 degree
   // columns), found through a range image, whatever the order of the input. First, a return
@@ -146,7 +146,7 @@ struct VerticalScanParams {
   // deviations of its heights, at most local_ground_roughness_max (a local roughness model,
   // 5.1.2). It takes back the flat ground (rough grass, kerbside parking, the sidewalk) that the
   // per-column terms call obstacle on real scans, and with it returns of shallow holes within
-  // the band of the ground around them. Costs about 3.5 M instructions per 124,000-return scan
+  // the band of the ground around them. Costs about 3.7 M instructions per 124,000-return scan
   // (AVX2).
   bool local_ground = false;
   float local_ground_cell = 1.0f;            // [m]
