@@ -11,6 +11,29 @@
 
 namespace ladar_perception {
 
+namespace {
+
+// The label bytes of four lanes from their obstacle bits and their unknown bits (one table
+// lookup each; ground is 0).
+struct LabelBytes {
+  uint32_t obstacle[16], unknown[16];
+  LabelBytes() {
+    static_assert(kLabelGround == 0, "label bytes assume ground = 0");
+    for (int m = 0; m < 16; ++m) {
+      obstacle[m] = unknown[m] = 0;
+      for (int l = 0; l < 4; ++l) {
+        if (m >> l & 1) {
+          obstacle[m] |= static_cast<uint32_t>(kLabelObstacle) << (8 * l);
+          unknown[m] |= static_cast<uint32_t>(kLabelUnknown) << (8 * l);
+        }
+      }
+    }
+  }
+  uint32_t of(int obstacle_bits, int unknown_bits) const { return obstacle[obstacle_bits] | unknown[unknown_bits]; }
+};
+
+}  // namespace
+
 #if defined(LADAR_CLONES)
 namespace {
 
@@ -61,17 +84,7 @@ __attribute__((target("avx2"))) std::size_t labelPointsAvx2(const LabelPass& L) 
   const __m256 v_inv_v_slope = _mm256_set1_ps(L.inv_v_slope);
   const __m256 v_inv_foot = _mm256_set1_ps(L.inv_foot);
   const __m256 v_deep = _mm256_set1_ps(L.deep);
-  static_assert(kLabelGround == 0, "label bytes assume ground = 0");
-  uint32_t obstacle_bytes[16], unknown_bytes[16];
-  for (int m = 0; m < 16; ++m) {
-    obstacle_bytes[m] = unknown_bytes[m] = 0;
-    for (int l = 0; l < 4; ++l) {
-      if (m >> l & 1) {
-        obstacle_bytes[m] |= static_cast<uint32_t>(kLabelObstacle) << (8 * l);
-        unknown_bytes[m] |= static_cast<uint32_t>(kLabelUnknown) << (8 * l);
-      }
-    }
-  }
+  const LabelBytes bytes;
   const float* __restrict knots = L.knots;
   const float* __restrict rep = L.rep;
   float* __restrict prob = L.prob;
@@ -146,8 +159,8 @@ __attribute__((target("avx2"))) std::size_t labelPointsAvx2(const LabelPass& L) 
     const int below_bits = obstacle_bits & below_line_bits;
     if (below_bits) appendGroups(L.below_groups, L.below_count, i, below_bits);
     _mm256_storeu_ps(prob + i, p8);
-    const uint32_t lo = obstacle_bytes[obstacle_bits & 0xF] | unknown_bytes[invalid_bits & 0xF];
-    const uint32_t hi = obstacle_bytes[obstacle_bits >> 4] | unknown_bytes[invalid_bits >> 4];
+    const uint32_t lo = bytes.of(obstacle_bits & 0xF, invalid_bits & 0xF);
+    const uint32_t hi = bytes.of(obstacle_bits >> 4, invalid_bits >> 4);
     std::memcpy(labels + i, &lo, 4);
     std::memcpy(labels + i + 4, &hi, 4);
   }
@@ -255,18 +268,7 @@ LADAR_HOT_PATH void VerticalScanGround::labelPoints(GroundClassification* out) {
     const __m128 v_thr = _mm_set1_ps(thr), v_inv_v_gnd = _mm_set1_ps(inv_v_gnd);
     const __m128i v_invalid = _mm_set1_epi32(static_cast<int>(unknown_bin_));
     const __m128i v_shift = _mm_cvtsi32_si128(shift);
-    // Label bytes of four lanes from their obstacle bits and their unknown bits.
-    static_assert(kLabelGround == 0, "label bytes assume ground = 0");
-    uint32_t obstacle_bytes[16], unknown_bytes[16];
-    for (int m = 0; m < 16; ++m) {
-      obstacle_bytes[m] = unknown_bytes[m] = 0;
-      for (int l = 0; l < 4; ++l) {
-        if (m >> l & 1) {
-          obstacle_bytes[m] |= static_cast<uint32_t>(kLabelObstacle) << (8 * l);
-          unknown_bytes[m] |= static_cast<uint32_t>(kLabelUnknown) << (8 * l);
-        }
-      }
-    }
+    const LabelBytes bytes;
     alignas(16) int32_t knot_i[4];
     const __m128i v_row_mask = _mm_set1_epi32(static_cast<int>(rows - 1));
     const __m128i v_invalid_all = _mm_set1_epi32(-1);
@@ -411,7 +413,7 @@ LADAR_HOT_PATH void VerticalScanGround::labelPoints(GroundClassification* out) {
           if (below_bits) below_groups[below_count++] = static_cast<uint32_t>(i >> 2) << 4 | below_bits;
         }
         _mm_storeu_ps(prob + i, p4v);
-        const uint32_t label4 = obstacle_bytes[obstacle_bits] | unknown_bytes[invalid_bits];
+        const uint32_t label4 = bytes.of(obstacle_bits, invalid_bits);
         std::memcpy(labels + i, &label4, 4);
       }
       return i;
