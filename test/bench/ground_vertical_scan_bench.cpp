@@ -7,11 +7,11 @@
 //   valgrind --tool=callgrind --instr-atstart=no ground_vertical_scan_bench --callgrind-once FILE.bin
 // loads the file, warms nothing, and instruments exactly one classify call (--thesis: the thesis
 // mode; --bins: the default without laser_neighbours; --curb-ground: the default with
-// curb_policy ground; --local-ground: the default with local_ground; --set key=value: one
+// curb_policy ground; --no-local-ground: the default without local_ground; --set key=value: one
 // parameter of the table on top, as ground_eval's --set; --warm: after one uninstrumented call,
 // as in a running stream).
 // Output of one call for comparisons between builds:
-//   ground_vertical_scan_bench --dump FILE.bin OUT [--thesis|--bins|--curb-ground|--local-ground]
+//   ground_vertical_scan_bench --dump FILE.bin OUT [--thesis|--bins|--curb-ground|--no-local-ground]
 //   [--set key=value ...]
 //   (n label bytes, n floats)
 #include <cstdio>
@@ -32,7 +32,7 @@ using namespace ladar_perception;
 
 namespace {
 
-enum class Mode { kDefault, kThesis, kBins, kCurbGround, kLocalGround };
+enum class Mode { kDefault, kThesis, kBins, kCurbGround, kNoLocalGround };
 
 VerticalScanParams paramsOf(Mode mode) {
   switch (mode) {
@@ -43,9 +43,9 @@ VerticalScanParams paramsOf(Mode mode) {
       p.curb_policy = kCurbGround;
       return p;
     }
-    case Mode::kLocalGround: {
+    case Mode::kNoLocalGround: {
       VerticalScanParams p = verticalScanDefaultParams();
-      p.local_ground = true;
+      p.local_ground = false;
       return p;
     }
     default: return verticalScanDefaultParams();
@@ -58,7 +58,7 @@ Mode modeOf(int argc, char** argv, int from) {
     if (std::strcmp(argv[a], "--thesis") == 0) mode = Mode::kThesis;
     if (std::strcmp(argv[a], "--bins") == 0) mode = Mode::kBins;
     if (std::strcmp(argv[a], "--curb-ground") == 0) mode = Mode::kCurbGround;
-    if (std::strcmp(argv[a], "--local-ground") == 0) mode = Mode::kLocalGround;
+    if (std::strcmp(argv[a], "--no-local-ground") == 0) mode = Mode::kNoLocalGround;
   }
   return mode;
 }
@@ -208,8 +208,8 @@ int main(int argc, char** argv) {
   benchmark::RegisterBenchmark("VerticalScanBins/kitti/000000.bin",
                                [](benchmark::State& s) { BM_Kitti(s, "000000.bin", Mode::kBins); })
       ->Unit(benchmark::kMillisecond);
-  benchmark::RegisterBenchmark("VerticalScanLocalGround/kitti/000000.bin",
-                               [](benchmark::State& s) { BM_Kitti(s, "000000.bin", Mode::kLocalGround); })
+  benchmark::RegisterBenchmark("VerticalScanNoLocalGround/kitti/000000.bin",
+                               [](benchmark::State& s) { BM_Kitti(s, "000000.bin", Mode::kNoLocalGround); })
       ->Unit(benchmark::kMillisecond);
   benchmark::RegisterBenchmark("VerticalScan/simulated_urban",
                                [](benchmark::State& s) { BM_SimulatedUrban(s, Mode::kDefault); })

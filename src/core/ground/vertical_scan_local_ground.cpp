@@ -44,11 +44,18 @@ struct LocalGroundPass {
   // A return on a face (onFace()) stays an obstacle.
   float face_min_height, face_slope;
 
+  // The face tests walk at most this many rows from a return.
+  static constexpr uint32_t kMaxFaceRows = 8;
+  // The return in range-image cell cn (the last one there in input order), n when it is empty.
+  std::size_t returnIn(uint32_t cn) const {
+    const uint32_t j = image[cn];
+    return j < n && cell[j] == cn ? j : n;
+  }
+
   // A face rises from return i: walking up its sub-column of the range image, the returns
   // stay within face_dr of it in r, the first rises no more than two row spacings at its
   // range, and one reaches face_height above it. An empty cell is passed over.
   bool faceRises(std::size_t i) const {
-    constexpr uint32_t kMaxFaceRows = 8;
     const uint32_t c = cell[i];
     const uint32_t row = c >> cell_shift;
     const uint32_t row_step = 1u << cell_shift;
@@ -56,9 +63,8 @@ struct LocalGroundPass {
     const float first_rise = std::max(face_height, 2.f * r * row_gap_tan[row]);
     bool first = true;
     for (uint32_t k = 1; k <= kMaxFaceRows && row + k < rows; ++k) {
-      const uint32_t cn = c + k * row_step;
-      const uint32_t j = image[cn];
-      if (!(j < n && cell[j] == cn)) continue;
+      const std::size_t j = returnIn(c + k * row_step);
+      if (j == n) continue;
       if (std::fabs(rr[j] - r) > face_dr) return false;
       const float rise = hh[j] - h;
       if (first && rise > first_rise) return false;
@@ -73,7 +79,6 @@ struct LocalGroundPass {
   // height (a curb's face, a step; not a bump of rough ground near the sensor, where the rows
   // lie a few cm apart in r).
   bool onFace(std::size_t i) const {
-    constexpr uint32_t kMaxFaceRows = 8;
     const uint32_t c = cell[i];
     const uint32_t row = c >> cell_shift;
     const uint32_t row_step = 1u << cell_shift;
@@ -82,9 +87,8 @@ struct LocalGroundPass {
       float r = rr[i], h = hh[i];
       for (uint32_t k = 1; k <= kMaxFaceRows; ++k) {
         if (side == 0 ? row + k >= rows : k > row) break;
-        const uint32_t cn = side == 0 ? c + k * row_step : c - k * row_step;
-        const uint32_t j = image[cn];
-        if (!(j < n && cell[j] == cn)) continue;
+        const std::size_t j = returnIn(side == 0 ? c + k * row_step : c - k * row_step);
+        if (j == n) continue;
         const float dr = std::fabs(rr[j] - r), dh = std::fabs(hh[j] - h);
         if (dr > face_dr || dh < face_slope * dr) break;
         r = rr[j];
@@ -123,7 +127,8 @@ struct LocalGroundPass {
     const float h = hh[i];
     return h >= lh[0] && h <= lh[1];
   }
-  // Obstacle return i, level with the ground around it: ground unless a face rises from it.
+  // Obstacle return i, level with the ground around it: ground unless a face rises from it or
+  // it lies on one.
   void levelReturn(std::size_t i) {
     if (faceRises(i) || onFace(i)) return;
     labels[i] = kLabelGround;
