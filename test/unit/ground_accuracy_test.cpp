@@ -261,8 +261,8 @@ TEST(GroundAccuracy, LaserNeighboursBeatTheBinsAlone) {
   // laser_neighbours (on by default; off in the "bins" settings): the returns of the rows
   // above and below at the same azimuth put the feet and tops of curb faces, car sides and
   // walls, and the rims of holes, on the obstacle side; negative obstacles are measured from
-  // the foot of a step. On these 3 scans, urban: 99.25 / 99.14 / 98.93 % with them, 97.88 /
-  // 98.98 / 96.92 % without; potholes 68.0 % against 57.9 %.
+  // the foot of a step. On these 3 scans, urban: 99.35 / 99.22 / 99.07 % with them, 98.00 /
+  // 99.29 / 97.10 % without; potholes 68.0 % against 57.9 % (before the column's face test).
   // The default without its local ground stage (which needs them), against the bins alone.
   VerticalScanParams neighbours = verticalScanDefaultParams();
   neighbours.local_ground = false;
@@ -270,7 +270,9 @@ TEST(GroundAccuracy, LaserNeighboursBeatTheBinsAlone) {
   const GroundAccuracy without = evaluate("urban", verticalScanBinsParams());
   EXPECT_GT(with.groundPrecision(), without.groundPrecision() + 0.01);
   EXPECT_GT(with.obstacleRecall(), without.obstacleRecall() + 0.015);
-  EXPECT_GE(with.groundRecall(), without.groundRecall());
+  // The column's face test (track_face_dr) gives the bins alone more ground recall than the
+  // neighbours' faces keep: 99.22 % with them, 99.29 % without (99.15 / 98.99 % before it).
+  EXPECT_GE(with.groundRecall(), without.groundRecall() - 0.002);
   const GroundAccuracy holes = evaluate("potholes", neighbours);
   const GroundAccuracy holes_without = evaluate("potholes", verticalScanBinsParams());
   EXPECT_GT(holes.obstacleRecall(), holes_without.obstacleRecall() + 0.08);

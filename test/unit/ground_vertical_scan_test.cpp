@@ -243,6 +243,43 @@ TEST(VerticalScanEquations, TrackedLineRecoversOnGroundFallingAwayBelowIt) {
   for (float x : {10.f, 12.f, 13.5f}) EXPECT_NEAR(line.heightAt(x), -0.3f * x - 0.4f, 0.03f) << "r " << x;
 }
 
+TEST(VerticalScanEquations, TrackedLineDoesNotContinueThroughTheFootOfAWall) {
+  // A column of a real scan (KITTI 00, frame 1): the road rising gently to 8.7 m, then a
+  // parked car's shadow, then a building's wall at 14.7 m whose lowest return (1.10 m) lies
+  // 0.73 m above the last ground return, within the step the gap grows (0.12 + 0.05 x 6 m over
+  // the extrapolation). Accepted, it takes the line up the wall. Other returns of the column
+  // within track_face_dr in r lie track_face_height or more above it: it is a face's foot.
+  std::vector<float> r, h;
+  for (float x = 3.75f; x < 8.65f; x += 0.25f) { r.push_back(x); h.push_back(0.04f + 0.055f * (x - 3.75f)); }
+  r.push_back(8.68f);
+  h.push_back(0.375f);
+  const float wall_r[] = {14.66f, 14.69f, 14.70f, 14.72f, 14.73f, 14.75f, 14.77f, 14.77f, 14.78f, 14.80f, 14.81f};
+  const float wall_h[] = {1.365f, 1.101f, 1.28f, 1.456f, 1.541f, 1.628f, 1.18f, 1.727f, 1.814f, 1.89f, 1.993f};
+  for (int k = 0; k < 11; ++k) { r.push_back(wall_r[k]); h.push_back(wall_h[k]); }
+  for (std::size_t i = 1; i < r.size(); ++i) ASSERT_GE(r[i], r[i - 1]);
+  const int knots = 24;
+  auto line_with = [&](float face_dr, std::vector<float>* kh) {
+    VerticalScanParams p = verticalScanDefaultParams();
+    p.track_face_dr = face_dr;
+    std::vector<float> ks(knots), scratch(2 * (r.size() + 1));
+    kh->assign(knots, 0.f);
+    return vertical_scan::trackGroundLine(r.data(), h.data(), static_cast<int>(r.size()), p, 0.05f, knots,
+                                          kh->data(), ks.data(), scratch.data());
+  };
+  const int road = static_cast<int>(r.size()) - 11;
+  const float inv_seg = 1.f / verticalScanDefaultParams().segment_length;
+  std::vector<float> off_kh, on_kh;
+  // Without the test: the road, the foot and, a step up from it, the wall's return at 1.18 m.
+  EXPECT_EQ(line_with(0.f, &off_kh), road + 2);
+  EXPECT_GT((vertical_scan::GroundLine{off_kh.data(), knots, inv_seg}.heightAt(14.69f)), 1.05f);
+  EXPECT_EQ(line_with(verticalScanDefaultParams().track_face_dr, &on_kh), road);
+  const vertical_scan::GroundLine on{on_kh.data(), knots, inv_seg};
+  EXPECT_NEAR(on.heightAt(8.f), 0.04f + 0.055f * (8.f - 3.75f), 0.03f);
+  // Beyond the road the line is the tail, rising no faster than the straight estimate (0.05):
+  // the wall's returns lie 0.4 m and more above it.
+  EXPECT_LT(on.heightAt(14.69f), 0.375f + 0.05f * 6.01f + 0.01f);
+}
+
 TEST(VerticalScanEquations, TrackedLineDoesNotClimbAParkedCarBesideTheVehicle) {
   // A column that a parked car 2.7 m away fills from the lowest laser up (measured on the urban
   // world): its side stacked at r = 2.7 m from 0.48 to 0.81 m, the hood at 0.93 m out to 4.05 m,
@@ -939,7 +976,11 @@ TEST(VerticalScanModel, LocalGroundMakesTheFeetOfANoisyWallObstacles) {
   // some of the wall's lowest returns ground. The local ground stage finds the face rising from
   // them (the rows above within local_ground_face_dr in r, 0.2 m higher).
   const RoughGroundWallScan s(40.f, 0.06f);
+  // Without the column's own face test (track_face_dr), which keeps most of them out of the
+  // ground line already (ParkedCarShadowScan below).
   VerticalScanParams on = verticalScanDefaultParams(), off = verticalScanDefaultParams();
+  on.track_face_dr = 0.f;
+  off.track_face_dr = 0.f;
   off.local_ground = false;
   const std::vector<uint8_t> off_labels = s.labels(off);
   const std::vector<uint8_t> on_labels = s.labels(on);

@@ -66,6 +66,12 @@ struct VerticalScanParams {
                                           // straight estimate (eqs 3.4-3.9)
   float track_recover_distance = 0.8f;    // consistent returns below the line over this many
                                           // metres restart it there (ground behind an obstacle)
+  // The foot of a face (5.1.2: vertical faces found before the slope test): a return with
+  // another of its column within track_face_dr in r and track_face_height or more above it
+  // does not continue the ground line. Over the shadow of a parked car the lowest return of the
+  // wall behind it lies within the gap-grown step of the line, which then climbs the wall.
+  float track_face_dr = 0.75f;            // [m]; 0 = off
+  float track_face_height = 0.3f;         // [m]
   bool couple_columns = true;             // neighbouring columns share ground evidence
   int coupling_radius = 2;                // columns on each side that are coupled
   int min_ground_returns = 3;             // fewer feasible returns: borrow from neighbours
@@ -272,7 +278,8 @@ struct GroundLine {
 // ground when (a) its residual to the extrapolation lies in [-(track_max_drop + gd dr),
 // track_max_step + g dr] (dr = gap to the last ground return, g = track_tolerance_per_m,
 // gd = track_drop_per_m) and (b) its slope from the last ground return lies in
-// [track_min_local_slope, track_max_local_slope]. Until the first return is accepted the line
+// [track_min_local_slope, track_max_local_slope], and (c) no return of the column within
+// track_face_dr of it in r lies track_face_height or more above it (the foot of a face). Until the first return is accepted the line
 // is only the straight estimate from the sensor's ground point, and the lower bound is
 // -(track_max_step + gd dr).
 // (VerticalScanGround seeds it with the straight estimate over the representatives off

@@ -163,6 +163,20 @@ inline void insertionSort(float* keys, V* vals, int n) {
   }
 }
 
+// Return i of a column (its representatives in r order) is the foot of a face: another lies
+// within face_dr of it in r and face_height or more above it. The lowest return of a wall seen
+// over a parked car, a fence's or a car's lowest: the line must not continue through them.
+inline bool footOfFace(const float* r, const float* height, int n, int i, float face_dr,
+                       float face_height) {
+  const float top = height[i] + face_height;
+  for (int j = i - 1; j >= 0 && r[i] - r[j] <= face_dr; --j) {
+    if (height[j] >= top) return true;
+  }
+  for (int j = i + 1; j < n && r[j] - r[i] <= face_dr; ++j) {
+    if (height[j] >= top) return true;
+  }
+  return false;
+}
 
 }  // namespace
 
@@ -251,6 +265,7 @@ LADAR_HOT_PATH int trackGroundLine(const float* r, const float* height, int n, c
   bool hole = false;
   const float hole_depth =
       p.negative_gnd_error_max > 0.f ? p.negative_gnd_error_max : p.tolerances.gnd_error_max_base;
+  const float face_dr = p.track_face_dr;
   for (int i = 0; i < n; ++i) {
     const float dr = r[i] - gr[m - 1];
     const float dh = height[i] - gh[m - 1];
@@ -304,6 +319,7 @@ LADAR_HOT_PATH int trackGroundLine(const float* r, const float* height, int n, c
     const float local = dh / (std::fabs(dr) + 0.02f);
     if (local > p.track_max_local_slope || local < p.track_min_local_slope) continue;
     if (dr <= 0.f) continue;  // same distance as the last ground return: keep the first
+    if (face_dr > 0.f && footOfFace(r, height, n, i, face_dr, p.track_face_height)) continue;
     below_first = below_last = -1;
     hole = false;
     const bool steep = local > p.ground_slope_max;

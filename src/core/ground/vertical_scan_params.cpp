@@ -70,6 +70,17 @@ VerticalScanParams verticalScanDefaultParams() {
   // 0.1-0.3 points more on potholes but cost urban ground recall down to 98.98 %).
   p.track_drop_per_m = 0.02f;
   p.track_recover_distance = 0.8f;
+  // The foot of a face does not continue the line: a return with another of its column within
+  // 0.75 m in r and 0.3 m or more above it (a rise steeper than ground_slope_max). On real
+  // scans the line otherwise climbed from the road, over the shadow of a parked car, to the
+  // lowest returns of the wall behind it (its step grows 5 cm per metre of gap), and the
+  // wall's bottom became ground. SemanticKITTI 00 frames 0-2, protocol A, precision / recall /
+  // F1 / obstacle recall: 99.18 / 98.68 / 98.93 / 98.09 % -> 99.45 / 98.82 / 99.14 / 98.74 %
+  // (within 0.5 m: 99.39 / 98.82 / 99.11 %; within 0.3 m, 0.2 m high: 99.31 / 98.84 / 99.08 %).
+  // Simulated, 10 scans: hillside obstacle recall 99.57 -> 99.52 %, every other figure the same
+  // or up to 0.08 points higher; the holes found the same.
+  p.track_face_dr = 0.75f;
+  p.track_face_height = 0.3f;
   // Before its first ground return a column's line rises at most 5 % (the straight
   // estimate alone let a parked car beside the vehicle, filling the column from the lowest
   // laser up, pass for a 0.3 slope: its side and hood became ground). 10 scans, seed 1: urban
