@@ -280,6 +280,26 @@ TEST(VerticalScanEquations, TrackedLineDoesNotContinueThroughTheFootOfAWall) {
   EXPECT_LT(on.heightAt(14.69f), 0.375f + 0.05f * 6.01f + 0.01f);
 }
 
+TEST(VerticalScanEquations, TrackedLineDropsAnObjectTopWhenTheGroundReappearsBelowIt) {
+  // Flat road to 18 m, then nothing for 7 m (a shadow), then the top of an object 0.4 m high
+  // at 25 m: within the step the gap grows (0.12 + 0.05 x 7 m), so the line takes it. The road
+  // reappears just behind it at 0 m and restarts the line after track_recover_distance; the
+  // object's top stands above that restart more steeply than ground_slope_max: it leaves the
+  // line, which runs flat through 25 m.
+  std::vector<float> r, h;
+  for (float x = 4.f; x < 18.1f; x += 0.5f) { r.push_back(x); h.push_back(0.f); }
+  r.push_back(25.f);
+  h.push_back(0.4f);
+  for (float x = 25.3f; x < 28.f; x += 0.4f) { r.push_back(x); h.push_back(0.f); }
+  const VerticalScanParams p = verticalScanDefaultParams();
+  const int knots = 40;
+  std::vector<float> kh(knots), ks(knots), scratch(2 * (r.size() + 1));
+  vertical_scan::trackGroundLine(r.data(), h.data(), static_cast<int>(r.size()), p, 0.f, knots,
+                                 kh.data(), ks.data(), scratch.data());
+  const vertical_scan::GroundLine line{kh.data(), knots, 1.f / p.segment_length};
+  for (float x : {20.f, 24.f, 25.f, 26.f, 27.f}) EXPECT_NEAR(line.heightAt(x), 0.f, 0.02f) << "r " << x;
+}
+
 TEST(VerticalScanEquations, TrackedLineDoesNotClimbAParkedCarBesideTheVehicle) {
   // A column that a parked car 2.7 m away fills from the lowest laser up (measured on the urban
   // world): its side stacked at r = 2.7 m from 0.48 to 0.81 m, the hood at 0.93 m out to 4.05 m,

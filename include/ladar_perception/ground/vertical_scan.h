@@ -277,11 +277,14 @@ struct GroundLine {
 // far (seeded with the straight estimate `slope0`, eqs 3.4-3.9) and accepting a return as
 // ground when (a) its residual to the extrapolation lies in [-(track_max_drop + gd dr),
 // track_max_step + g dr] (dr = gap to the last ground return, g = track_tolerance_per_m,
-// gd = track_drop_per_m) and (b) its slope from the last ground return lies in
-// [track_min_local_slope, track_max_local_slope], and (c) no return of the column within
-// track_face_dr of it in r lies track_face_height or more above it (the foot of a face). Until the first return is accepted the line
-// is only the straight estimate from the sensor's ground point, and the lower bound is
-// -(track_max_step + gd dr).
+// gd = track_drop_per_m), (b) its slope from the last ground return lies in
+// [track_min_local_slope, track_max_local_slope] and (c) no return of the column within
+// track_face_dr of it in r lies track_face_height or more above it (the foot of a face).
+// Until the first return is accepted the line is only the straight estimate from the sensor's
+// ground point, and the lower bound is -(track_max_step + gd dr). Returns below the line that
+// continue each other over track_recover_distance restart it there; the ground returns the
+// line took across a gap just before, standing above the restart more steeply than
+// ground_slope_max (an object's top), leave it.
 // (VerticalScanGround seeds it with the straight estimate over the representatives off
 // vertical surfaces.) The accepted polyline is sampled at the knots; beyond the last ground
 // return it is extrapolated with the tracked slope, but rising no faster than slope0 (flat

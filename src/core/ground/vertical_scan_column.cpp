@@ -300,7 +300,18 @@ LADAR_HOT_PATH int trackGroundLine(const float* r, const float* height, int n, c
         below_first = below_last = i;
       }
       if (r[below_last] - r[below_first] < p.track_recover_distance) continue;
-      // The run is long enough to be ground: restart the line at its first return.
+      // The run is long enough to be ground: restart the line at its first return. The last
+      // ground returns before it, when the line reached them across a gap (longer than such a
+      // run) and each stands above the restart more steeply than any ground slope, were the
+      // top of an object (a car's bonnet seen over a bush), not ground: they leave the line.
+      for (int k = m - 1; k > 1 && gh[k] - height[below_first] >
+                                       p.track_max_step + p.ground_slope_max * (r[below_first] - gr[k]);
+           --k) {
+        if (gr[k] - gr[k - 1] >= p.track_recover_distance) {
+          m = k;
+          break;
+        }
+      }
       gr[m] = r[below_first];
       gh[m] = height[below_first];
       ++m;
