@@ -22,6 +22,16 @@ constexpr float kSensorHeight = 1.73f;
 
 // ---------------------------------------------------------------- equations on one column
 
+// The ground line trackGroundLine() tracks through one column's returns (r, h in r order) with
+// settings p: its knot heights in *kh; returns the number of returns it accepted.
+int trackLine(const std::vector<float>& r, const std::vector<float>& h, const VerticalScanParams& p,
+              float slope0, int knots, std::vector<float>* kh) {
+  std::vector<float> ks(knots), scratch(2 * (r.size() + 1));
+  kh->assign(knots, 0.f);
+  return vertical_scan::trackGroundLine(r.data(), h.data(), static_cast<int>(r.size()), p, slope0, knots,
+                                        kh->data(), ks.data(), scratch.data());
+}
+
 TEST(VerticalScanEquations, FeasibilityIsStrictSlopeWindow) {  // eq 3.4
   VerticalScanParams p = verticalScanThesisParams();
   p.ground_slope_min = -0.2f;
@@ -261,10 +271,7 @@ TEST(VerticalScanEquations, TrackedLineDoesNotContinueThroughTheFootOfAWall) {
   auto line_with = [&](float face_dr, std::vector<float>* kh) {
     VerticalScanParams p = verticalScanDefaultParams();
     p.track_face_dr = face_dr;
-    std::vector<float> ks(knots), scratch(2 * (r.size() + 1));
-    kh->assign(knots, 0.f);
-    return vertical_scan::trackGroundLine(r.data(), h.data(), static_cast<int>(r.size()), p, 0.05f, knots,
-                                          kh->data(), ks.data(), scratch.data());
+    return trackLine(r, h, p, 0.05f, knots, kh);
   };
   const int road = static_cast<int>(r.size()) - 11;
   const float inv_seg = 1.f / verticalScanDefaultParams().segment_length;
@@ -293,9 +300,8 @@ TEST(VerticalScanEquations, TrackedLineDropsAnObjectTopWhenTheGroundReappearsBel
   for (float x = 25.3f; x < 28.f; x += 0.4f) { r.push_back(x); h.push_back(0.f); }
   const VerticalScanParams p = verticalScanDefaultParams();
   const int knots = 40;
-  std::vector<float> kh(knots), ks(knots), scratch(2 * (r.size() + 1));
-  vertical_scan::trackGroundLine(r.data(), h.data(), static_cast<int>(r.size()), p, 0.f, knots,
-                                 kh.data(), ks.data(), scratch.data());
+  std::vector<float> kh;
+  trackLine(r, h, p, 0.f, knots, &kh);
   const vertical_scan::GroundLine line{kh.data(), knots, 1.f / p.segment_length};
   for (float x : {20.f, 24.f, 25.f, 26.f, 27.f}) EXPECT_NEAR(line.heightAt(x), 0.f, 0.02f) << "r " << x;
 }
@@ -317,10 +323,7 @@ TEST(VerticalScanEquations, TrackedLineDoesNotClimbAParkedCarBesideTheVehicle) {
   auto line_with = [&](float first_slope_max, std::vector<float>* kh) {
     VerticalScanParams p = verticalScanDefaultParams();
     p.track_first_slope_max = first_slope_max;
-    std::vector<float> ks(knots), scratch(2 * (r.size() + 1));
-    kh->assign(knots, 0.f);
-    return vertical_scan::trackGroundLine(r.data(), h.data(), static_cast<int>(r.size()), p, 0.29f, knots,
-                                          kh->data(), ks.data(), scratch.data());
+    return trackLine(r, h, p, 0.29f, knots, kh);
   };
   const float inv_seg = 1.f / verticalScanDefaultParams().segment_length;
   std::vector<float> kh;
