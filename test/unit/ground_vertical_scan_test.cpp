@@ -306,6 +306,93 @@ TEST(VerticalScanEquations, TrackedLineDropsAnObjectTopWhenTheGroundReappearsBel
   for (float x : {20.f, 24.f, 25.f, 26.f, 27.f}) EXPECT_NEAR(line.heightAt(x), 0.f, 0.02f) << "r " << x;
 }
 
+// A column's representatives as (r, height) pairs.
+void columnOf(const float (*rh)[2], std::size_t n, std::vector<float>* r, std::vector<float>* h) {
+  r->clear();
+  h->clear();
+  for (std::size_t i = 0; i < n; ++i) {
+    r->push_back(rh[i][0]);
+    h->push_back(rh[i][1]);
+  }
+}
+
+TEST(VerticalScanEquations, TrackedLineDoesNotReachACarTopOverItsRearFace) {
+  // A column of a real scan (KITTI 00, frame 2, azimuth 21 deg): a parking lane to 17.2 m, a
+  // hedge rising to 0.40 m at 19 m, its shadow, then a parked car's rear face at 24.4 m (0.11
+  // to 0.70 m) and its top at 27.1 m (0.72 m). The face's lower returns are the foot of a face;
+  // its top return, 7 m past the last ground return, lies within the step that gap grows
+  // (0.12 + 0.05 x 7.1 m over the extrapolation). At a foot the line refused, the ground was no
+  // higher than that foot: the step's growth starts again there, and the car's top is not ground.
+  const float rh[][2] = {
+      {4.07f, -0.08f}, {4.13f, -0.06f}, {4.24f, -0.06f}, {4.29f, -0.03f}, {4.43f, -0.04f}, {4.55f, -0.05f},
+      {4.67f, -0.05f}, {4.82f, -0.05f}, {4.96f, -0.06f}, {5.10f, -0.05f}, {5.30f, -0.07f}, {5.41f, -0.07f},
+      {5.71f, -0.06f}, {5.98f, -0.08f}, {6.14f, -0.06f}, {6.40f, -0.07f}, {6.80f, -0.07f}, {7.09f, -0.09f},
+      {7.32f, -0.07f}, {7.68f, -0.08f}, {8.11f, -0.10f}, {8.39f, -0.10f}, {8.78f, -0.12f}, {9.13f, -0.12f},
+      {9.50f, -0.11f}, {10.13f, -0.12f}, {10.64f, -0.12f}, {11.06f, -0.12f}, {11.69f, -0.13f}, {12.41f, -0.12f},
+      {13.49f, -0.15f}, {13.89f, -0.11f}, {14.29f, -0.10f}, {15.09f, -0.11f}, {15.78f, -0.10f}, {16.45f, -0.10f},
+      {17.16f, -0.09f}, {17.31f, 0.00f}, {17.35f, 0.11f}, {17.62f, 0.19f}, {17.91f, 0.28f}, {18.44f, 0.34f},
+      {19.02f, 0.40f}, {24.39f, 0.25f}, {24.42f, 0.70f}, {24.44f, 0.42f}, {24.57f, 0.11f}, {27.11f, 0.72f}};
+  const std::size_t n = sizeof rh / sizeof rh[0];
+  const int knots = 40;
+  const VerticalScanParams p = verticalScanDefaultParams();
+  auto line_of = [&](std::size_t skip, std::vector<float>* kh) {
+    std::vector<float> r, h;
+    columnOf(rh, n, &r, &h);
+    if (skip < n) {
+      r.erase(r.begin() + static_cast<std::ptrdiff_t>(skip));
+      h.erase(h.begin() + static_cast<std::ptrdiff_t>(skip));
+    }
+    trackLine(r, h, p, -0.0107f, knots, kh);
+    return vertical_scan::GroundLine{kh->data(), knots, 1.f / p.segment_length};
+  };
+  std::vector<float> kh, kh_without_foot;
+  const vertical_scan::GroundLine line = line_of(n, &kh);
+  // The car's lowest return (0.11 m) stays within the ground's tolerance of the line; its
+  // top lies 0.5 m and more above it.
+  EXPECT_LT(line.heightAt(24.42f), 0.2f);
+  EXPECT_LT(line.heightAt(27.11f), 0.25f);
+  // Without the face's foot at 24.39 m (0.25 m), nothing bounds the ground there and the top
+  // of the face continues the line.
+  const std::size_t foot = n - 5;
+  ASSERT_FLOAT_EQ(rh[foot][0], 24.39f);
+  EXPECT_GT(line_of(foot, &kh_without_foot).heightAt(24.42f), 0.6f);
+}
+
+TEST(VerticalScanEquations, TrackedLineDoesNotClimbToAWallOverReturnsItRefused) {
+  // A column of a real scan (KITTI 00, frame 1, azimuth 22 deg): the road to 17 m, a grass
+  // bank rising to 0.23 m at 18.4 m, which the line follows and extrapolates upward (0.11),
+  // a car at 24.9 m with the road at 23.2 and 27.7 m between, then a building's wall from
+  // 32.3 m (1.5 to 3 m). Below the extrapolation by less than the drop the gap grows, the
+  // wall's returns would continue the line or restart it as ground reappearing lower. A chord
+  // from the last ground return to them passes 0.3 m and more above the road returns between:
+  // the line does not climb there.
+  const float rh[][2] = {
+      {4.21f, -0.05f}, {4.31f, -0.03f}, {4.41f, -0.03f}, {4.52f, -0.04f}, {4.65f, -0.04f}, {4.79f, -0.04f},
+      {4.93f, -0.04f}, {5.06f, -0.03f}, {5.25f, -0.05f}, {5.37f, -0.05f}, {5.52f, -0.05f}, {5.95f, -0.07f},
+      {6.09f, -0.05f}, {6.34f, -0.05f}, {6.74f, -0.05f}, {7.00f, -0.06f}, {7.26f, -0.05f}, {7.59f, -0.06f},
+      {8.01f, -0.08f}, {8.27f, -0.07f}, {8.64f, -0.08f}, {8.98f, -0.08f}, {9.33f, -0.07f}, {9.98f, -0.09f},
+      {10.50f, -0.09f}, {10.88f, -0.09f}, {11.49f, -0.09f}, {12.21f, -0.09f}, {13.29f, -0.12f}, {13.91f, -0.11f},
+      {14.33f, -0.11f}, {15.11f, -0.12f}, {15.81f, -0.10f}, {16.44f, -0.10f}, {17.05f, -0.07f}, {17.83f, 0.06f},
+      {17.87f, -0.06f}, {18.09f, 0.15f}, {18.40f, 0.23f}, {23.23f, -0.07f}, {24.84f, 0.52f}, {24.89f, 0.68f},
+      {24.91f, 0.21f}, {24.94f, 0.39f}, {24.95f, 0.82f}, {25.04f, 1.13f}, {25.23f, 0.96f}, {25.24f, 1.27f},
+      {27.49f, 1.36f}, {27.70f, -0.12f}, {32.34f, 1.48f}, {32.39f, 1.68f}, {32.74f, 2.04f}, {34.23f, 1.88f},
+      {37.34f, 2.50f}, {42.43f, 3.10f}, {42.54f, 2.58f}, {43.57f, 2.93f}};
+  std::vector<float> r, h;
+  columnOf(rh, sizeof rh / sizeof rh[0], &r, &h);
+  const int knots = 64;
+  auto line_with = [&](float face_dr, std::vector<float>* kh) {
+    VerticalScanParams p = verticalScanDefaultParams();
+    p.track_face_dr = face_dr;
+    trackLine(r, h, p, -0.0077f, knots, kh);
+    return vertical_scan::GroundLine{kh->data(), knots, 1.f / p.segment_length};
+  };
+  std::vector<float> on_kh, off_kh;
+  const vertical_scan::GroundLine on = line_with(verticalScanDefaultParams().track_face_dr, &on_kh);
+  for (float x : {32.34f, 34.23f, 37.34f, 42.43f}) EXPECT_LT(on.heightAt(x), 0.5f) << "r " << x;
+  const vertical_scan::GroundLine off = line_with(0.f, &off_kh);
+  EXPECT_GT(off.heightAt(34.23f), 1.5f);
+}
+
 TEST(VerticalScanEquations, TrackedLineDoesNotClimbAParkedCarBesideTheVehicle) {
   // A column that a parked car 2.7 m away fills from the lowest laser up (measured on the urban
   // world): its side stacked at r = 2.7 m from 0.48 to 0.81 m, the hood at 0.93 m out to 4.05 m,

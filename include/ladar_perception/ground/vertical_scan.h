@@ -70,6 +70,10 @@ struct VerticalScanParams {
   // another of its column within track_face_dr in r and track_face_height or more above it
   // does not continue the ground line. Over the shadow of a parked car the lowest return of the
   // wall behind it lies within the gap-grown step of the line, which then climbs the wall.
+  // With it (track_face_dr > 0): the step's growth over a gap starts again at the last foot the
+  // line refused, and a return that rises track_face_height or more above the last ground
+  // return is refused (and a run below the line does not restart it) when the chord to it
+  // passes track_face_height or more above a return in between.
   float track_face_dr = 0.75f;            // [m]; 0 = off
   float track_face_height = 0.3f;         // [m]
   bool couple_columns = true;             // neighbouring columns share ground evidence
@@ -278,13 +282,16 @@ struct GroundLine {
 // ground when (a) its residual to the extrapolation lies in [-(track_max_drop + gd dr),
 // track_max_step + g dr] (dr = gap to the last ground return, g = track_tolerance_per_m,
 // gd = track_drop_per_m), (b) its slope from the last ground return lies in
-// [track_min_local_slope, track_max_local_slope] and (c) no return of the column within
-// track_face_dr of it in r lies track_face_height or more above it (the foot of a face).
+// [track_min_local_slope, track_max_local_slope], (c) no return of the column within
+// track_face_dr of it in r lies track_face_height or more above it (the foot of a face) and
+// (d) when it rises track_face_height or more above the last ground return, the chord to it
+// passes no return in between by track_face_height or more. The gap dr of g dr counts from the
+// last foot of a face refused since the last ground return, where it is nearer.
 // Until the first return is accepted the line is only the straight estimate from the sensor's
 // ground point, and the lower bound is -(track_max_step + gd dr). Returns below the line that
-// continue each other over track_recover_distance restart it there; the ground returns the
-// line took across a gap just before, standing above the restart more steeply than
-// ground_slope_max (an object's top), leave it.
+// continue each other over track_recover_distance restart it there (unless the chord to the
+// first of them fails (d)); the ground returns the line took across a gap just before,
+// standing above the restart more steeply than ground_slope_max (an object's top), leave it.
 // (VerticalScanGround seeds it with the straight estimate over the representatives off
 // vertical surfaces.) The accepted polyline is sampled at the knots; beyond the last ground
 // return it is extrapolated with the tracked slope, but rising no faster than slope0 (flat

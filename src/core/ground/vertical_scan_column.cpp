@@ -178,6 +178,21 @@ inline bool footOfFace(const float* r, const float* height, int n, int i, float 
   return false;
 }
 
+// The chord from the ground point (r0, h0) to return `to` of a column rises by face_height or
+// more and passes face_height or more above a return between them (returns to - 1, to - 2, ...
+// beyond r0). The ground is never that far above a return: the line would climb across a face
+// it refused (a bush's or a car's, the foot of a wall) to the top of an object or a wall beyond.
+inline bool chordClimbsOverReturns(const float* r, const float* height, int to, float r0, float h0,
+                                   float face_height) {
+  const float rise = height[to] - h0;
+  if (rise < face_height) return false;
+  const float per_m = rise / std::max(r[to] - r0, 1e-3f);
+  for (int j = to - 1; j >= 0 && r[j] > r0; --j) {
+    if (h0 + per_m * (r[j] - r0) - height[j] >= face_height) return true;
+  }
+  return false;
+}
+
 }  // namespace
 
 // --------------------------------------------------------------------------------------------
@@ -266,11 +281,19 @@ LADAR_HOT_PATH int trackGroundLine(const float* r, const float* height, int n, c
   const float hole_depth =
       p.negative_gnd_error_max > 0.f ? p.negative_gnd_error_max : p.tolerances.gnd_error_max_base;
   const float face_dr = p.track_face_dr;
+  const float face_height = p.track_face_height;
+  const bool faces = face_dr > 0.f;
+  // The farthest return refused as the foot of a face since the last ground return.
+  float face_r = 0.f;
   for (int i = 0; i < n; ++i) {
     const float dr = r[i] - gr[m - 1];
     const float dh = height[i] - gh[m - 1];
     const float gap = dr > 0.f ? dr : 0.f;
-    const float grow = p.track_tolerance_per_m * gap;
+    // The step tolerance grows over the terrain not seen since the last ground return; at the
+    // foot of a face the line refused, the ground was no higher than that foot, so the growth
+    // starts again there (a car's top behind its rear face is not reached as a step).
+    const float unseen = r[i] - std::max(gr[m - 1], face_r);
+    const float grow = p.track_tolerance_per_m * (unseen > 0.f ? unseen : 0.f);
     const float grow_drop = p.track_drop_per_m * gap;
     const float res = dh - slope * dr;
     // Before the first ground return the extrapolation is the straight estimate from the
@@ -304,14 +327,21 @@ LADAR_HOT_PATH int trackGroundLine(const float* r, const float* height, int n, c
       // ground returns before it, when the line reached them across a gap (longer than such a
       // run) and each stands above the restart more steeply than any ground slope, were the
       // top of an object (a car's bonnet seen over a bush), not ground: they leave the line.
+      int keep = m;
       for (int k = m - 1; k > 1 && gh[k] - height[below_first] >
                                        p.track_max_step + p.ground_slope_max * (r[below_first] - gr[k]);
            --k) {
         if (gr[k] - gr[k - 1] >= p.track_recover_distance) {
-          m = k;
+          keep = k;
           break;
         }
       }
+      // A run below an upward extrapolation may still be a wall far above the ground: not when
+      // the line would climb to it over returns it refused.
+      if (faces && chordClimbsOverReturns(r, height, below_first, gr[keep - 1], gh[keep - 1], face_height)) {
+        continue;
+      }
+      m = keep;
       gr[m] = r[below_first];
       gh[m] = height[below_first];
       ++m;
@@ -330,7 +360,13 @@ LADAR_HOT_PATH int trackGroundLine(const float* r, const float* height, int n, c
     const float local = dh / (std::fabs(dr) + 0.02f);
     if (local > p.track_max_local_slope || local < p.track_min_local_slope) continue;
     if (dr <= 0.f) continue;  // same distance as the last ground return: keep the first
-    if (face_dr > 0.f && footOfFace(r, height, n, i, face_dr, p.track_face_height)) continue;
+    if (faces) {
+      if (footOfFace(r, height, n, i, face_dr, face_height)) {
+        face_r = r[i];
+        continue;
+      }
+      if (chordClimbsOverReturns(r, height, i, gr[m - 1], gh[m - 1], face_height)) continue;
+    }
     below_first = below_last = -1;
     hole = false;
     const bool steep = local > p.ground_slope_max;

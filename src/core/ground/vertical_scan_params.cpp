@@ -79,6 +79,12 @@ VerticalScanParams verticalScanDefaultParams() {
   // (within 0.5 m: 99.39 / 98.82 / 99.11 %; within 0.3 m, 0.2 m high: 99.31 / 98.84 / 99.08 %).
   // Simulated, 10 scans: hillside obstacle recall 99.57 -> 99.52 %, every other figure the same
   // or up to 0.08 points higher; the holes found the same.
+  // With it, the line does not climb over returns it refused (a chord 0.3 m above one of
+  // them) and the step's growth over a gap restarts at a refused foot: a car's top behind its
+  // rear face, a wall behind a grass bank the line had extrapolated upward. Frames 0-2:
+  // 99.45 / 98.83 / 99.14 / 98.72 -> 99.53 / 98.84 / 99.18 / 98.90 %, precision per frame
+  // 99.57 / 99.45 / 99.32 -> 99.59 / 99.56 / 99.42 %; the simulated worlds within 0.04 points
+  // (seeds 1-3), the holes found the same.
   p.track_face_dr = 0.75f;
   p.track_face_height = 0.3f;
   // Before its first ground return a column's line rises at most 5 % (the straight
