@@ -160,7 +160,9 @@ TEST(LidarModels, TopDownRingsLabelLikeBottomUpRings) {
   EXPECT_LT(differ, slot.size() / 200) << differ << " of " << slot.size();
   // Empty slots are unknown.
   for (std::size_t i = 0; i < organised_view.size(); ++i) {
-    if (organised_view.xyz(i).isZero()) ASSERT_EQ(a.labels[i], kLabelUnknown) << i;
+    if (organised_view.xyz(i).isZero()) {
+      ASSERT_EQ(a.labels[i], kLabelUnknown) << i;
+    }
   }
 
   // The same organised cloud without its ring field: rows from the layout.
